@@ -1,0 +1,24 @@
+"""Equilibria of the faceting energy: fronts, N-pulses, splices (section "Formal Equilibrium").
+
+``heteroclinic(alpha, well)`` -> the front ``psi_h``; ``npulse(n_pulses, alpha, ...)`` ->
+the N-fold symmetric faceted equilibrium; ``circle(R, alpha, ...)``; all return
+:class:`Equilibrium` (except the front). Conventions and the corrected signs follow
+MATH.md section 5.
+"""
+
+from qsa.equilibria.heteroclinic import Heteroclinic, heteroclinic
+from qsa.equilibria.npulse import circle, npulse, resolving_size
+from qsa.equilibria.orbit import PeriodicOrbit, periodic_orbit, periodic_range
+from qsa.equilibria.result import Equilibrium
+
+__all__ = [
+    "Equilibrium",
+    "Heteroclinic",
+    "PeriodicOrbit",
+    "circle",
+    "heteroclinic",
+    "npulse",
+    "periodic_orbit",
+    "periodic_range",
+    "resolving_size",
+]
