@@ -45,8 +45,11 @@ _PANEL = 0.5
 
 def _logistic(x, kstar):
     """``psi = kstar / (1 + e^-x)`` and ``z = kstar - psi``, accurate at both tails."""
-    t = np.tanh(0.5 * x)
-    return 0.5 * kstar * (1 + t), 0.5 * kstar * (1 - t)
+    x = np.asarray(x)
+    neg = x.real < 0
+    e = np.exp(np.where(neg, x, -x))  # real part <= 0: no overflow, no cancellation
+    p, q = e / (1 + e), 1 / (1 + e)
+    return kstar * np.where(neg, p, q), kstar * np.where(neg, q, p)
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,13 +105,21 @@ class Heteroclinic:
         for _ in range(60):
             dx = (self._sigma_of_x(x) - sigma) / self._G(x)
             x = x - dx
-            if np.all(np.abs(dx) <= 1e-15 * (1 + np.abs(x))):
+            # converged when the step no longer moves psi (quadrature noise in sigma(x)
+            # near the wells limits x itself to ~1e-11, psi to ~1e-16 kstar)
+            psi, z = _logistic(x.real, self.kstar)
+            if np.all((np.abs(dx) <= 1e-15 * (1 + np.abs(x)))
+                      | (np.abs(dx) * psi * z <= 1e-16 * self.kstar**2)):
                 break
         return x
 
     def __call__(self, sigma):
         """``psi_h(sigma)``, shape like ``sigma``."""
         return _logistic(self._x_of_sigma(sigma), self.kstar)[0]
+
+    def complement(self, sigma):
+        """``kstar - psi_h(sigma)`` without cancellation (the upper tail); shape like sigma."""
+        return _logistic(self._x_of_sigma(sigma), self.kstar)[1]
 
     def derivative(self, sigma):
         """``psi_h'(sigma) = psi (kstar - psi) / (kstar dsigma/dx)``, shape like ``sigma``.

@@ -157,19 +157,24 @@ class PeriodicOrbit:
         lo, hi = vb[j].copy(), vb[j + 1].copy()
         frac = np.where(S[j + 1] > S[j], (sig - S[j]) / np.maximum(S[j + 1] - S[j], 1e-300), 0.5)
         v = lo + frac * (hi - lo)
+        hw = 0.5 * (self.b - self.a) / max(abs(self.a), abs(self.b))
+        act = np.arange(v.size)
         for _ in range(80):
-            half = 0.5 * (v - vb[j])
-            nodes = vb[j][:, None] + half[:, None] * (1 + _GL_X)
-            f = S[j] + half * (t["F"](nodes) @ _GL_W) - sig
-            lo = np.where(f < 0, v, lo)
-            hi = np.where(f > 0, v, hi)
-            dv = f / t["F"](v)
-            new = v - dv
-            bad = ~((new > lo) & (new < hi)) | ~np.isfinite(new)
-            new = np.where(bad, 0.5 * (lo + hi), new)
-            done = np.abs(new - v) <= 1e-15 * (1 + np.abs(v))
-            v = new
-            if np.all(done):
+            jj, va = j[act], v[act]
+            half = 0.5 * (va - vb[jj])
+            nodes = vb[jj][:, None] + half[:, None] * (1 + _GL_X)
+            f = S[jj] + half * (t["F"](nodes) @ _GL_W) - sig[act]
+            lo[act] = np.where(f < 0, va, lo[act])
+            hi[act] = np.where(f > 0, va, hi[act])
+            new = va - f / t["F"](va)
+            bad = ~((new > lo[act]) & (new < hi[act])) | ~np.isfinite(new)
+            new = np.where(bad, 0.5 * (lo[act] + hi[act]), new)
+            # converged once the step no longer moves psi = m + h tanh(v)
+            step = np.abs(new - va)
+            done = (step <= 1e-15 * (1 + np.abs(va))) | (hw * step / np.cosh(va) ** 2 <= 1e-16)
+            v[act] = new
+            act = act[~done]
+            if act.size == 0:
                 break
         return v
 
