@@ -221,8 +221,9 @@ def _build(fam: _Family, alpha, nu2, *, rho=None) -> PeriodicOrbit:
         def R(xa, xb, v):
             return 0.25 * (d + xa) * (d + xb)
     else:
-        a = brentq(lambda x: float(fam.P(x, nu2)), fam.s_lo, fam.c, xtol=1e-300, rtol=1e-15, maxiter=500)
-        b = brentq(lambda x: float(fam.P(x, nu2)), fam.c, fam.s_hi, xtol=1e-300, rtol=1e-15, maxiter=500)
+        opts = {"xtol": 1e-300, "rtol": 1e-15, "maxiter": 500}
+        a = brentq(lambda x: float(fam.P(x, nu2)), fam.s_lo, fam.c, **opts)
+        b = brentq(lambda x: float(fam.P(x, nu2)), fam.c, fam.s_hi, **opts)
         h = 0.5 * (b - a)
         d_lo = abs(float(fam.dP(a)) / float(fam.well.d2W(a)))
         d_hi = abs(float(fam.dP(b)) / float(fam.well.d2W(b)))
