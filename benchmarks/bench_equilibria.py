@@ -16,11 +16,11 @@ from qsa.equilibria import heteroclinic, npulse
 from qsa.equilibria.orbit import orbit_with_turning
 
 
-def best_of(f, repeat=3):
+def best_of(f, *args, repeat=3, **kwargs):
     best = np.inf
     for _ in range(repeat):
         t = time.perf_counter()
-        out = f()
+        out = f(*args, **kwargs)
         best = min(best, time.perf_counter() - t)
     return best, out
 
@@ -34,11 +34,12 @@ def main():
         for alpha in (0.05, 0.1, 0.2, 0.3):
             if n * alpha >= 1:
                 continue
-            t_orb, _ = best_of(lambda: orbit_with_turning(alpha, 2 * np.pi / n, kstar=kstar))
-            t, eq = best_of(lambda: npulse(n, alpha, kstar=kstar))
+            t_orb, _ = best_of(orbit_with_turning, alpha, 2 * np.pi / n, kstar=kstar)
+            t, eq = best_of(npulse, n, alpha, kstar=kstar)
             worst = max(worst, t)
+            ok = "yes" if eq.success else "NO"
             print(f"{n:>3} {alpha:>6.2f} {eq.curve.N:>6} {1e3 * t_orb:>11.1f} {1e3 * t:>12.1f} "
-                  f"{eq.closure:>9.1e} {eq.relative_residual:>9.1e} {'yes' if eq.success else 'NO':>3}")
+                  f"{eq.closure:>9.1e} {eq.relative_residual:>9.1e} {ok:>3}")
     print(f"\nslowest N-pulse construction: {worst:.3f} s (target < 1 s)")
 
     class Sextic:
@@ -56,8 +57,8 @@ def main():
             return (self.W(k + h) - 2 * self.W(k) + self.W(k - h)) / h**2
 
     s = np.linspace(-1, 1, 10_000)
-    t_build, front = best_of(lambda: heteroclinic(0.1, Sextic()))
-    t_eval, _ = best_of(lambda: front(s))
+    t_build, front = best_of(heteroclinic, 0.1, Sextic())
+    t_eval, _ = best_of(front, s)
     print(f"heteroclinic, non-quartic well: build {1e3 * t_build:.1f} ms, "
           f"10^4 evaluations {1e3 * t_eval:.1f} ms")
 

@@ -285,7 +285,6 @@ def splice(positions, alpha, well=None, grid=None, length=None, kstar=None, beta
     """
     from qsa.curve import Curve
     from qsa.energies import Faceting, Perimeter
-
     from qsa.equilibria.npulse import _grid, faceting_residual, resolving_size
 
     alpha = _positive(alpha, "alpha")
@@ -378,19 +377,86 @@ def polygon_positions(angles, facets, kstar):
     return np.array(pos), s
 
 
-def splice_polygon(angles, facets, alpha, well=None, grid=None, kstar=None, **kwargs):
-    """A splice shaped like a rounded polygon (corner angles, facet lengths).
+def _sharp_facets(arcs, angles, facets, kstar):
+    """Minimum-norm change of the facets that closes the sharp rounded polygon.
 
-    The facets of a polygon with prescribed exterior angles must satisfy the two
-    closure equations; the request is projected onto closed rounded polygons by
-    the minimum-norm closure solve of :func:`splice` (which moves the fronts).
+    Corner i turns from direction ``phi_i`` by ``angles[i]`` along an arc of radius
+    ``1/kstar``; facet i then runs in direction ``phi_{i+1}``. Closure is linear in
+    the facets: ``sum f_i e^{i phi_{i+1}} = -sum chord_i``.
+    """
+    phi = np.concatenate([[0.0], np.cumsum(angles)])
+    chords = (np.exp(1j * phi[1:]) - np.exp(1j * phi[:-1])) / (1j * kstar)
+    A = np.vstack([np.cos(phi[1:]), np.sin(phi[1:])])
+    rhs = -np.array([chords.sum().real, chords.sum().imag]) - A @ facets
+    return facets + np.linalg.lstsq(A, rhs, rcond=None)[0]
+
+
+def splice_polygon(angles, facets, alpha, well=None, grid=None, kstar=None, tol=1e-12,
+                   max_iter=30, **kwargs):
+    """A splice shaped like a rounded polygon with the given corner angles.
+
+    Corner ``i`` turns by ``angles[i]`` (an arc of curvature ``kstar`` between an up- and
+    a down-front) and is followed by a facet of length close to ``facets[i]``. The
+    angles are kept; the facets are changed by the smallest amount (least squares)
+    that closes the curve -- first for sharp fronts (a linear problem), then with the
+    real fronts by Gauss-Newton steps in the facet lengths.
+
+    Parameters
+    ----------
+    angles : array_like, shape (N,)
+        Exterior corner angles, positive, summing to ``2 pi``.
+    facets : array_like, shape (N,)
+        Requested facet lengths, positive.
+    alpha, well, grid, kstar, tol, max_iter
+        As in :func:`splice`; further keyword arguments are passed on to it.
 
     Raises
     ------
     ValueError
-        Invalid polygon data (see :func:`polygon_positions`) or a polygon that cannot
-        close with positive facet lengths.
+        Invalid polygon data (see :func:`polygon_positions`), or a polygon that cannot
+        close with these angles and facets longer than two front widths (e.g. two
+        corners that are not both ``pi``).
     """
     well, kstar = resolve_well(well, kstar)
-    positions, L = polygon_positions(angles, facets, kstar)
-    return splice(positions, alpha, well, grid, length=L, kstar=kstar, **kwargs)
+    alpha = _positive(alpha, "alpha")
+    positions, _ = polygon_positions(angles, facets, kstar)
+    ang = np.asarray(angles, dtype=float)
+    arcs = ang / kstar
+    f = _sharp_facets(arcs, ang, np.asarray(facets, dtype=float), kstar)
+
+    def cannot_close(f):
+        raise ValueError(
+            f"the polygon cannot close with angles {np.round(ang, 6).tolist()}: closing it "
+            f"needs facet lengths {np.round(f, 6).tolist()}, not all longer than two front "
+            f"widths ({2 * front.width:.3g})"
+        )
+
+    front = heteroclinic(alpha, well, kstar)
+    if np.any(f <= 2 * front.width):
+        cannot_close(f)
+    cutoff = kwargs.pop("cutoff", None)
+
+    def closure(f):
+        p, L = polygon_positions(ang, f, kstar)
+        p, cut = _check_positions(p, L, cutoff, front)
+        C, _ = _closure_and_jacobian(SpliceProfile(front, p, L, cut), _fine_grid(front, L),
+                                     want_jac=False)
+        return C[:2]
+
+    C = closure(f)
+    for _ in range(max_iter):
+        if np.linalg.norm(C) <= 0.1 * tol:
+            break
+        h = 1e-7 * np.max(f)
+        J = np.column_stack([(closure(f + h * e) - closure(f - h * e)) / (2 * h)
+                             for e in np.eye(f.size)])
+        f = f + np.linalg.lstsq(J, -C, rcond=None)[0]
+        if np.any(f <= 2 * front.width):
+            cannot_close(f)
+        C = closure(f)
+    positions, L = polygon_positions(ang, f, kstar)
+    eq = splice(positions, alpha, well, grid, length=L, kstar=kstar, tol=tol,
+                max_iter=max_iter, cutoff=cutoff, **kwargs)
+    eq.params["angles"] = ang.tolist()
+    eq.params["facets"] = f.tolist()
+    return eq
