@@ -1,15 +1,17 @@
 """Equilibria of the faceting energy: fronts, N-pulses, splices (section "Formal Equilibrium").
 
 ``heteroclinic(alpha, well)`` -> the front ``psi_h``; ``npulse(n_pulses, alpha, ...)`` ->
-the N-fold symmetric faceted equilibrium; ``circle(R, alpha, ...)``; all return
-:class:`Equilibrium` (except the front). Conventions and the corrected signs follow
-MATH.md section 5.
+the N-fold symmetric faceted equilibrium; ``splice(positions, alpha, length=...)`` and
+``splice_polygon(angles, facets, alpha)`` -> 2N-front quasi-equilibria closed to 1e-12;
+``circle(R, alpha, ...)``. All but the front return :class:`Equilibrium`. Conventions
+and the corrected signs follow MATH.md section 5.
 """
 
 from qsa.equilibria.heteroclinic import Heteroclinic, heteroclinic
 from qsa.equilibria.npulse import circle, npulse, resolving_size
 from qsa.equilibria.orbit import PeriodicOrbit, periodic_orbit, periodic_range
 from qsa.equilibria.result import Equilibrium
+from qsa.equilibria.splice import SpliceProfile, splice, splice_polygon
 
 __all__ = [
     "Equilibrium",
@@ -21,4 +23,7 @@ __all__ = [
     "periodic_orbit",
     "periodic_range",
     "resolving_size",
+    "splice",
+    "splice_polygon",
+    "SpliceProfile",
 ]

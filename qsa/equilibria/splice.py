@@ -345,6 +345,7 @@ def polygon_positions(angles, facets, kstar):
 
     Corner ``i`` (exterior angle ``angles[i]``) is an arc of curvature ``kstar`` and
     length ``angles[i] / kstar``; it is followed by the straight facet ``facets[i]``.
+    ``s = 0`` is the middle of the last facet.
 
     Returns
     -------
@@ -370,11 +371,11 @@ def polygon_positions(angles, facets, kstar):
     if np.any(fac <= 0):
         raise ValueError("facets must have positive lengths")
     arcs = ang / kstar
-    pos, s = [], 0.0
+    pos, s = [], 0.5 * fac[-1]  # s = 0 in the middle of the last facet
     for arc, f in zip(arcs, fac, strict=True):
         pos += [s, s + arc]
         s += arc + f
-    return np.array(pos), s
+    return np.array(pos), s - 0.5 * fac[-1]
 
 
 def _sharp_facets(arcs, angles, facets, kstar):
