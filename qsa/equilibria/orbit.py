@@ -30,9 +30,19 @@ tangent) ``Theta = int_period psi dsigma = 2 int psi dsigma/dv dv``, both with
 composite Gauss-Legendre panels of width 1 in ``v``. ``R`` is evaluated without
 cancellation: for the quartic with ``nu1 = 0`` from the exact roots
 (``R = (d + x_a)(d + x_b)/4``, ``x_a = psi - a``, ``x_b = b - psi``, ``d`` the gap to the
-outer roots), otherwise from ``P(psi) = x_a * mean(P')`` on ``[a, psi]`` (or its
-mirror at ``b``), which stays accurate at the turning points. The orbit is sampled
-by inverting ``sigma(v)`` with safeguarded Newton steps.
+outer roots); for polynomial wells (the quartic with ``nu1 != 0``, or a well with a
+``coefficients`` attribute in ``numpy.polyval`` order) the orbit is labelled by the
+offset ``ystar`` of its turning point from the separatrix well ``s*`` of P, and near
+that turning point ``P`` is the exact difference quotient of the Taylor polynomial
+of P about ``s*`` -- accurate for any ``ystar`` down to the underflow limit, where
+double-precision roots would only resolve ``1e-16 s*``; elsewhere (and for other
+wells) ``P(psi) = x_a * mean(P')`` on ``[a, psi]`` (or its mirror at ``b``), which stays
+accurate at ordinary turning points. Non-polynomial wells are therefore limited
+to plateau depths well above ``1e-16 kstar``; :func:`orbit_with_turning` says so. The
+orbit is sampled by inverting ``sigma(v)`` with safeguarded Newton steps.
+
+No multiple precision is needed on these paths; ``mpmath`` serves the tests as
+an independent reference.
 """
 
 from __future__ import annotations
@@ -68,6 +78,8 @@ class _Family:
     nu2_c: float
     nu2_sep: float
     closed: bool  # quartic well and nu1 == 0: exact roots
+    star: float = None  # polynomial path: the well of P whose level is the separatrix
+    q: np.ndarray = None  # Taylor coefficients of W + nu1 psi about `star` (ascending)
 
     def P(self, psi, nu2):
         return self.well.W(psi) + self.nu1 * psi + nu2
@@ -76,10 +88,55 @@ class _Family:
         return self.well.dW(psi) + self.nu1
 
 
+def _poly(well, kstar):
+    """Ascending coefficients of W if it is a polynomial (quartic or ``well.coefficients``)."""
+    if is_quartic(well, kstar):
+        return np.array([0.0, 0.0, 0.25 * kstar**2, -0.5 * kstar, 0.25])
+    c = getattr(well, "coefficients", None)  # numpy.polyval order (highest first)
+    return None if c is None else np.asarray(c, dtype=float)[::-1].copy()
+
+
+def _poly_family(well, kstar, nu1, coef) -> _Family:
+    """Critical points from the polynomial; Taylor coefficients about the separatrix well."""
+    P0 = np.polynomial.Polynomial(coef + np.r_[0.0, nu1, np.zeros(len(coef) - 2)])
+    dP, d2P = P0.deriv(), P0.deriv(2)
+    crit = []
+    for r in dP.roots():
+        if abs(r.imag) > 1e-9 * kstar:
+            continue
+        x = r.real
+        for _ in range(3):  # polish the root in double precision
+            d2 = d2P(x)
+            if d2 != 0:
+                x -= dP(x) / d2
+        crit.append(x)
+    crit = np.sort(np.array(crit))
+    best = None
+    for j in range(1, len(crit) - 1):
+        if d2P(crit[j]) < 0 < d2P(crit[j - 1]) and d2P(crit[j + 1]) > 0:
+            if best is None or abs(crit[j] - 0.5 * kstar) < abs(crit[best] - 0.5 * kstar):
+                best = j
+    if best is None:
+        raise ValueError(
+            f"nu1={nu1}: W'(psi) + nu1 has no maximum of P between two minima, so "
+            "alpha^2 psi'' - W'(psi) = nu1 has no periodic orbits (|nu1| too large)"
+        )
+    c, s_lo, s_hi = crit[best], crit[best - 1], crit[best + 1]
+    star = s_hi if P0(s_hi) >= P0(s_lo) else s_lo
+    q = (P0(np.polynomial.Polynomial([star, 1.0]))).coef
+    q = np.r_[q, np.zeros(max(0, 3 - len(q)))]
+    q[1] = 0.0  # star is a critical point of P0 (exactly, in the shifted coordinate)
+    return _Family(well, kstar, float(nu1), c, s_lo, s_hi, -float(P0(c)), -float(q[0]),
+                   False, star, q)
+
+
 def _family(well, kstar, nu1) -> _Family:
     if is_quartic(well, kstar) and nu1 == 0.0:
         k = kstar
         return _Family(well, k, 0.0, 0.5 * k, 0.0, k, -(k**4) / 64, 0.0, True)
+    coef = _poly(well, kstar)
+    if coef is not None:
+        return _poly_family(well, kstar, nu1, coef)
     k = np.linspace(-1.0, 2.0, 3001) * kstar
     dP = np.asarray(well.dW(k), dtype=float) + nu1
     idx = np.nonzero(np.sign(dP[:-1]) * np.sign(dP[1:]) <= 0)[0]
@@ -204,8 +261,67 @@ class PeriodicOrbit:
         return f"nu2 in ({self._t['family'].nu2_c!r}, {self._t['family'].nu2_sep!r})"
 
 
-def _build(fam: _Family, alpha, nu2, *, rho=None) -> PeriodicOrbit:
-    """Orbit for ``nu2`` (or, on the exact quartic path, for ``rho = 2 sqrt(-nu2)``)."""
+def _Q(q, y):
+    """``P0(star + y) - P0(star)`` from the Taylor coefficients (no cancellation)."""
+    return sum(q[k] * y**k for k in range(2, len(q)))
+
+
+def _Q_difference_quotient(q, y, x):
+    """``(Q(y + x) - Q(y)) / x`` by ``A^k - B^k = (A - B) sum A^(k-1-j) B^j``."""
+    A = y + x
+    out = 0.0
+    for k in range(2, len(q)):
+        out = out + q[k] * sum(A ** (k - 1 - j) * y**j for j in range(k))
+    return out
+
+
+def _poly_orbit(fam, nu2, ystar):
+    """Turning points and ``R`` for a polynomial well, exact near the separatrix well.
+
+    The orbit is labelled by ``ystar`` = (turning point near ``star``) - ``star``; then
+    ``nu2 = nu2_sep - Q(ystar)`` and, near that turning point, ``P(t + x)/x`` is the
+    difference quotient of ``Q`` -- a sum of same-sign terms, accurate even when
+    ``|ystar|`` is far below the rounding unit of ``star``.
+    """
+    q, star = fam.q, fam.star
+    if ystar is None:  # from nu2: Q(ystar) = nu2_sep - nu2 on the segment star -> c
+        target = fam.nu2_sep - nu2
+        ystar = brentq(lambda y: _Q(q, y) - target, 0.0, fam.c - star, xtol=1e-300,
+                       rtol=1e-15, maxiter=500)
+    else:
+        nu2 = fam.nu2_sep - _Q(q, ystar)
+    level = _Q(q, ystar)
+    other_end = fam.s_lo if star == fam.s_hi else fam.s_hi
+    other = brentq(lambda x: _Q(q, x - star) - level, fam.c, other_end, xtol=1e-300,
+                   rtol=1e-15, maxiter=500)
+    t = star + ystar
+    high = star == fam.s_hi  # the separatrix turning point is b (else a)
+    a, b = (other, t) if high else (t, other)
+    far = a if high else b  # the ordinary turning point
+    d_star = abs(ystar)
+    d_far = abs(float(fam.dP(far)) / float(fam.well.d2W(far)))
+
+    def R(xa, xb, v):
+        near = (v > 0) if high else (v <= 0)
+        # star side: P(t -+ x) / x from the exact difference quotient
+        x_star = np.where(near, xb if high else xa, 0.0)
+        sgn = -1.0 if high else 1.0
+        pq = sgn * _Q_difference_quotient(q, ystar, sgn * x_star)
+        # far side: P(far +- x) = x mean(P') on the segment
+        x_far = np.where(near, 0.0, xa if high else xb)
+        fs = 1.0 if high else -1.0
+        pts = far + (fs * x_far)[..., None] * _MEAN_X
+        pm = fs * (fam.dP(pts) @ _MEAN_W)
+        P_over_x = np.where(near, pq, pm)
+        return P_over_x / np.where(near, xa if high else xb, xb if high else xa)
+
+    d_lo, d_hi = (d_far, d_star) if high else (d_star, d_far)
+    return a, b, nu2, d_star, R, d_lo, d_hi
+
+
+def _build(fam: _Family, alpha, nu2, *, rho=None, ystar=None) -> PeriodicOrbit:
+    """Orbit for ``nu2`` (exact quartic path: ``rho = 2 sqrt(-nu2)``; polynomial path:
+    ``ystar``, the offset of the separatrix-side turning point from its well)."""
     k = fam.kstar
     if fam.closed:
         if rho is None:
@@ -220,6 +336,9 @@ def _build(fam: _Family, alpha, nu2, *, rho=None) -> PeriodicOrbit:
 
         def R(xa, xb, v):
             return 0.25 * (d + xa) * (d + xb)
+    elif fam.q is not None:
+        a, b, nu2, depth, R, d_lo, d_hi = _poly_orbit(fam, nu2, ystar)
+        h = 0.5 * (b - a)
     else:
         opts = {"xtol": 1e-300, "rtol": 1e-15, "maxiter": 500}
         a = brentq(lambda x: float(fam.P(x, nu2)), fam.s_lo, fam.c, **opts)
@@ -362,6 +481,12 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
         def orbit(t):
             return _build(fam, alpha, None, rho=0.25 * kstar**2 * np.exp(-t))
         t_max = 650.0
+    elif fam.q is not None:
+        y0 = fam.c - fam.star
+
+        def orbit(t):
+            return _build(fam, alpha, None, ystar=y0 * np.exp(-t))
+        t_max = 650.0
     else:
         span = fam.nu2_sep - fam.nu2_c
         floor = 64 * np.finfo(float).eps * max(abs(fam.nu2_sep), abs(fam.nu2_c))
@@ -378,9 +503,11 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
     ts = [1e-6, 1e-3, 0.03, 0.1, 0.3, 1.0]
     while ts[-1] < t_max:
         ts.append(min(2 * ts[-1], t_max))
-    prev_t, prev_f, seen = None, None, []
+    prev_t, prev_f, seen, depth = None, None, [], None
     for t in ts:
-        ft = f(t)
+        orb = orbit(t)
+        ft = orb.turning - target
+        depth = orb.depth
         seen.append(ft + target)
         if ft == 0:
             return orbit(t)
@@ -398,5 +525,6 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
         )
     raise ValueError(
         f"no periodic orbit turns by {target:.6g}: the family with alpha={alpha}, "
-        f"nu1={fam.nu1} turns by {lo:.6g} ... {hi:.6g} per pulse.{cond}"
+        f"nu1={fam.nu1} turns by {lo:.6g} ... {hi:.6g} per pulse (followed to plateau "
+        f"depth {depth:.1e} from the separatrix).{cond}"
     )

@@ -115,3 +115,12 @@ def test_summary_is_json():
     eq = npulse(3, 0.2, kstar=K)
     d = json.loads(eq.to_json())
     assert d["kind"] == "npulse" and d["params"]["n_pulses"] == 3
+
+
+@pytest.mark.parametrize(("n", "alpha", "nu1"), [(2, 0.05, 0.3), (3, 0.05, 0.05), (5, 0.1, 0.3)])
+def test_nonzero_nu1_near_the_separatrix(n, alpha, nu1):
+    """nu1 != 0 (asymmetric pulses): exact near the separatrix via the polynomial path."""
+    eq = npulse(n, alpha, kstar=K, nu1=nu1)
+    assert eq.success, eq.message
+    assert eq.closure <= 1e-10 and eq.residual <= 1e-8 * eq.residual_scale
+    assert eq.params["turning"] * n == pytest.approx(2 * np.pi, rel=1e-13)
