@@ -256,10 +256,6 @@ class PeriodicOrbit:
         slope = h / (np.cosh(v) ** 2 * self._t["F"](v))
         return np.where(rising, slope, -slope)
 
-    @property
-    def range_info(self) -> str:
-        return f"nu2 in ({self._t['family'].nu2_c!r}, {self._t['family'].nu2_sep!r})"
-
 
 def _Q(q, y):
     """``P0(star + y) - P0(star)`` from the Taylor coefficients (no cancellation)."""
