@@ -69,11 +69,12 @@ class Energy(ABC):
 
     def normal_velocity(self, c: Curve) -> np.ndarray:
         """Outward normal velocity ``V^n = -G d_kappa E - kappa (g d_g E)`` (e:L2grad), (N,)."""
-        from qsa.geometry import helmholtz
+        from qsa.geometry import apply_laplace_s
 
         grad = self.gradient(c)
-        N = c.N
-        return -(helmholtz(c) @ grad[:N]) - c.kappa * (c.g * grad[N:])
+        mu, ggE = grad[: c.N], c.g * grad[c.N :]
+        # -G mu = Delta_s mu + kappa^2 mu
+        return apply_laplace_s(c, mu) + c.kappa**2 * mu - c.kappa * ggE
 
     def terms(self) -> tuple:
         """The summands (a single energy is its own only term)."""
