@@ -1,0 +1,314 @@
+"""Geometric rows shared by the curve DAEs: positions, equal chords, curvature, gauge.
+
+See :mod:`qsa.flows.dae` for the equations and sign conventions.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from qsa.flows.base import DAESystem
+
+__all__ = ["CurveDAE", "equalize_chords"]
+
+
+# ----------------------------------------------------------------- helpers
+def _number(value, name, *, positive=False, nonnegative=False):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    if positive and not v > 0:
+        raise ValueError(f"{name} must be positive, got {value!r}")
+    if nonnegative and not v >= 0:
+        raise ValueError(f"{name} must be non-negative, got {value!r}")
+    return v
+
+
+def _check_xy(x, y, min_nodes):
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.ndim != 1 or x.shape != y.shape:
+        raise ValueError(f"x and y must be 1-d arrays of equal length, got {x.shape}, {y.shape}")
+    if x.size < min_nodes:
+        raise ValueError(f"x, y have N={x.size} nodes; the model needs N >= {min_nodes}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise ValueError("x, y contain NaN or inf")
+    chords = np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
+    if np.any(chords == 0):
+        raise ValueError("x, y contain repeated consecutive nodes (zero chord)")
+    area = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+    if not area > 0:
+        raise ValueError(
+            "x, y must describe a counter-clockwise closed curve (signed area > 0); "
+            "reverse the node order of a clockwise curve"
+        )
+    return x, y
+
+
+def equalize_chords(x, y, *, tol=1e-13, maxiter=30, max_spread=0.05):
+    """Project node positions onto equal chords ``|X_{j+1} - X_j| = L/N`` (ap:scaled).
+
+    Minimum-norm Gauss-Newton steps on ``|X_{j+1} - X_j|^2 = (L/N)^2`` with the
+    target length ``L`` fixed to the polygon length of the input. Meant for
+    inputs that are already resampled to (nearly) equal chords.
+
+    Parameters
+    ----------
+    x, y : ndarray, shape (N,)
+    tol : float
+        Relative tolerance on ``max_j | |chord_j|^2 / c^2 - 1 |``.
+    maxiter : int
+    max_spread : float
+        Largest accepted relative spread ``ptp(chords) / mean(chords)`` of the
+        input; larger spreads raise ``ValueError`` (a projection would visibly
+        deform the curve: resample instead).
+
+    Returns
+    -------
+    x, y : ndarray, shape (N,)
+    L : float
+        The length ``N |chord|``.
+    """
+    x = np.array(x, dtype=float)
+    y = np.array(y, dtype=float)
+    N = x.size
+    j = np.arange(N)
+    jp = (j + 1) % N
+    chords = np.hypot(x[jp] - x, y[jp] - y)
+    spread = np.ptp(chords) / np.mean(chords)
+    if spread > max_spread:
+        raise ValueError(
+            f"x, y: chord lengths differ by {100 * spread:.3g}% (> {100 * max_spread:g}%); "
+            "resample the curve to equal chords first "
+            "(qsa.resample.resample_closed(x, y, N, method='chord'))"
+        )
+    c2 = np.mean(chords) ** 2
+    for _ in range(maxiter):
+        ex = x[jp] - x
+        ey = y[jp] - y
+        r = ex * ex + ey * ey - c2
+        if np.max(np.abs(r)) <= tol * c2:
+            break
+        rows = np.concatenate([j, j, j, j])
+        cols = np.concatenate([jp, j, N + jp, N + j])
+        vals = np.concatenate([2 * ex, -2 * ex, 2 * ey, -2 * ey])
+        J = sp.csr_matrix((vals, (rows, cols)), shape=(N, 2 * N))
+        lam = spla.splu((J @ J.T).tocsc()).solve(r)
+        step = J.T @ lam
+        x -= step[:N]
+        y -= step[N:]
+    else:
+        raise ValueError(
+            "x, y: could not equalize the chords (resample the curve to equal chords first)"
+        )
+    return x, y, float(N * math.sqrt(np.mean(ex * ex + ey * ey)))
+
+
+class _Triplets:
+    """COO accumulator for sparse Jacobian assembly (vectorised blocks)."""
+
+    def __init__(self):
+        self.rows, self.cols, self.vals = [], [], []
+
+    def add(self, rows, cols, vals):
+        rows, cols, vals = np.broadcast_arrays(rows, cols, vals)
+        self.rows.append(rows.ravel())
+        self.cols.append(cols.ravel())
+        self.vals.append(np.asarray(vals, dtype=float).ravel())
+
+    def tocsc(self, n):
+        return sp.csc_matrix(
+            (np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))),
+            shape=(n, n),
+        )
+
+
+# ------------------------------------------------------------- the system
+class CurveDAE(DAESystem):
+    """Geometric part shared by the curve DAEs (positions, chords, curvature, gauge).
+
+    Subclasses define ``fields`` (names of the per-node blocks, positions first
+    and ``"kappa"`` third), the model rows (``_model_residual``,
+    ``_model_jacobian``) and the energy.
+
+    Layout of ``y``: ``[field_0 (N), field_1 (N), ..., L]``; rows: normal
+    motion (N), chords (N), curvature (N), model rows (N per auxiliary field
+    and ``V``), gauge (1).
+    """
+
+    fields: tuple = ()
+
+    def __init__(self, x, y):
+        self.N = N = x.size
+        self.h = 1.0 / N
+        self.size = len(self.fields) * N + 1
+        self.offset = {name: k * N for k, name in enumerate(self.fields)}
+        self.iL = len(self.fields) * N
+        self.error_index = np.arange(2 * N)
+        self._j = np.arange(N)
+        self._jp = np.roll(self._j, -1)
+        self._jm = np.roll(self._j, 1)
+
+    # ------------------------------------------------------------ access
+    def unpack(self, y):
+        """Named views of the blocks of ``y`` (and ``L`` as a float)."""
+        y = np.asarray(y, dtype=float)
+        if y.shape != (self.size,):
+            raise ValueError(f"y has shape {y.shape}, expected ({self.size},)")
+        out = {name: y[k * self.N : (k + 1) * self.N] for k, name in enumerate(self.fields)}
+        out["L"] = float(y[self.iL])
+        return out
+
+    def positions(self, y):
+        y = np.asarray(y, dtype=float)
+        return y[: self.N].copy(), y[self.N : 2 * self.N].copy()
+
+    def length(self, y):
+        return float(y[self.iL])
+
+    def curvature(self, y):
+        """The curvature unknowns ``kappa``, shape (N,)."""
+        return np.asarray(y, dtype=float)[2 * self.N : 3 * self.N].copy()
+
+    def normal_velocity(self, y):
+        o = self.offset["V"]
+        return np.asarray(y, dtype=float)[o : o + self.N].copy()
+
+    def dissipation(self, y):
+        """Discrete ``int (V^n)^2 dsigma = sum_j V_j^2 L/N``; the energy decays at this rate."""
+        V = self.normal_velocity(y)
+        return float(np.sum(V * V) * self.length(y) / self.N)
+
+    @property
+    def differential_rows(self):
+        """Rows of ``F`` that contain ``ydot`` (normal motion and gauge); the rest are algebraic."""
+        return np.r_[np.arange(self.N), self.size - 1]
+
+    def time_derivative(self, y):
+        """The ``ydot`` consistent with the DAE at a state ``y`` that satisfies the algebraic rows.
+
+        Solves the differential rows ``F(y, ydot) = 0`` (linear in ``ydot``)
+        together with the time derivatives of the algebraic rows,
+        ``dF_alg/dy . ydot = 0`` (one sparse LU). Useful for the first step of
+        a multistep method and for instantaneous ``dE/dt``.
+
+        Returns
+        -------
+        ndarray, shape (size,)
+        """
+        y = np.asarray(y, dtype=float)
+        zero = np.zeros(self.size)
+        Jy = self.jacobian(y, zero, 0.0)
+        Jd = self.jacobian(y, zero, 1.0) - Jy
+        sel = np.zeros(self.size)
+        sel[self.differential_rows] = 1.0
+        M = (sp.diags(sel) @ Jd + sp.diags(1.0 - sel) @ Jy).tocsc()
+        rhs = -self.residual(y, zero) * sel
+        return spla.splu(M).solve(rhs)
+
+    # ---------------------------------------------------------- geometry
+    def _geometry(self, X, Y):
+        jp, jm, h = self._jp, self._jm, self.h
+        tx = (X[jp] - X[jm]) / (2 * h)
+        ty = (Y[jp] - Y[jm]) / (2 * h)
+        d2x = (X[jp] - 2 * X + X[jm]) / h**2
+        d2y = (Y[jp] - 2 * Y + Y[jm]) / h**2
+        return tx, ty, d2x, d2y
+
+    def _d2(self, f):
+        return (f[self._jp] - 2 * f + f[self._jm]) / self.h**2
+
+    def geometric_curvature(self, X, Y, L):
+        """Curvature from positions, ``(t_x D2Y - t_y D2X) / L^3`` (ap:curvature, sign fixed)."""
+        tx, ty, d2x, d2y = self._geometry(X, Y)
+        return (tx * d2y - ty * d2x) / L**3
+
+    def residual(self, y, ydot):
+        y = np.asarray(y, dtype=float)
+        ydot = np.asarray(ydot, dtype=float)
+        N, h = self.N, self.h
+        X, Y = y[:N], y[N : 2 * N]
+        Xd, Yd = ydot[:N], ydot[N : 2 * N]
+        kappa = y[2 * N : 3 * N]
+        L = y[self.iL]
+        V = y[self.offset["V"] : self.offset["V"] + N]
+        tx, ty, d2x, d2y = self._geometry(X, Y)
+        ex = X[self._jp] - X
+        ey = Y[self._jp] - Y
+        F = np.empty(self.size)
+        F[:N] = Xd * ty - Yd * tx - L * V
+        F[N : 2 * N] = (ex * ex + ey * ey) / h**2 - L * L
+        F[2 * N : 3 * N] = kappa - (tx * d2y - ty * d2x) / L**3
+        F[3 * N : self.size - 1] = self._model_residual(y, tx, ty)
+        F[-1] = h * np.sum(Xd * tx + Yd * ty)
+        return F
+
+    def jacobian(self, y, ydot, c):
+        y = np.asarray(y, dtype=float)
+        ydot = np.asarray(ydot, dtype=float)
+        c = float(c)
+        N, h = self.N, self.h
+        j, jp, jm = self._j, self._jp, self._jm
+        X, Y = y[:N], y[N : 2 * N]
+        Xd, Yd = ydot[:N], ydot[N : 2 * N]
+        L = y[self.iL]
+        iV = self.offset["V"] + j
+        V = y[iV]
+        iX, iY, iK, iL = j, N + j, 2 * N + j, self.iL
+        tx, ty, d2x, d2y = self._geometry(X, Y)
+        T = _Triplets()
+        # normal motion: Xd ty - Yd tx - L V
+        r = j
+        T.add(r, iX[jp], -Yd / (2 * h))
+        T.add(r, iX[jm], Yd / (2 * h))
+        T.add(r, iY[jp], Xd / (2 * h))
+        T.add(r, iY[jm], -Xd / (2 * h))
+        T.add(r, iV, -L)
+        T.add(r, iL, -V)
+        T.add(r, iX, c * ty)
+        T.add(r, iY, -c * tx)
+        # chords: |X_{j+1} - X_j|^2 / h^2 - L^2
+        r = N + j
+        ex = (X[jp] - X) * (2 / h**2)
+        ey = (Y[jp] - Y) * (2 / h**2)
+        T.add(r, iX[jp], ex)
+        T.add(r, iX, -ex)
+        T.add(r, iY[jp], ey)
+        T.add(r, iY, -ey)
+        T.add(r, iL, -2 * L)
+        # curvature: kappa - C / L^3, C = tx d2y - ty d2x
+        r = 2 * N + j
+        s = -1.0 / L**3
+        C = tx * d2y - ty * d2x
+        T.add(r, iK, 1.0)
+        T.add(r, iX[jp], s * (d2y / (2 * h) - ty / h**2))
+        T.add(r, iX[jm], s * (-d2y / (2 * h) - ty / h**2))
+        T.add(r, iX, s * (2 * ty / h**2))
+        T.add(r, iY[jp], s * (tx / h**2 - d2x / (2 * h)))
+        T.add(r, iY[jm], s * (tx / h**2 + d2x / (2 * h)))
+        T.add(r, iY, s * (-2 * tx / h**2))
+        T.add(r, iL, 3 * C / L**4)
+        # gauge: h sum (Xd tx + Yd ty)
+        r = self.size - 1
+        T.add(r, iX[jp], Xd / 2)
+        T.add(r, iX[jm], -Xd / 2)
+        T.add(r, iY[jp], Yd / 2)
+        T.add(r, iY[jm], -Yd / 2)
+        T.add(r, iX, c * h * tx)
+        T.add(r, iY, c * h * ty)
+        self._model_jacobian(T, y, tx, ty)
+        return T.tocsc(self.size)
+
+    # ------------------------------------------------------- model hooks
+    def _model_residual(self, y, tx, ty):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _model_jacobian(self, T, y, tx, ty):  # pragma: no cover - abstract
+        raise NotImplementedError
