@@ -63,7 +63,7 @@ class FacetingSystem(CurveDAE):
         return e, 0.5 * (e * e + e[self._jm] ** 2)
 
     def _velocity(self, y):
-        """e:Facet-NV: ``V = Delta_s mu + kappa^2 mu - kappa (-alpha^2 q/2 + W + beta (L - L*))``."""
+        """e:Facet-NV: ``V = Delta_s mu + kappa^2 mu - kappa (-alpha^2 q/2 + W + beta (L-L*))``."""
         m = self.model
         u = self.unpack(y)
         kappa, L = u["kappa"], u["L"]
