@@ -40,10 +40,13 @@ are off by factors 8 and 4 (MATH.md section 6); nothing here uses them.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
@@ -54,7 +57,9 @@ __all__ = [
     "adhesion_pairs",
     "adhesion_energy",
     "adhesion_fields",
-    "adhesion_field_derivatives",
+    "PairDerivatives",
+    "adhesion_pair_derivatives",
+    "adhesion_field_jacobians",
 ]
 
 
@@ -128,6 +133,18 @@ class AdhesionKernel:
 
     def __call__(self, l):
         return self.A(l)
+
+    def derivatives(self, l, order=2):
+        """``(A, A', A'')`` (``order=2``) or ``(A, A')`` (``order=1``) with one exponential."""
+        s = self.l_star**2
+        c = self.a**2 * s
+        l = np.asarray(l, dtype=float)
+        e = self.A0 * np.exp(-l / s)
+        A = (1.0 - l / c) * e
+        dA = (l / (c * s) - 1.0 / c - 1.0 / s) * e
+        if order == 1:
+            return A, dA
+        return A, dA, (2.0 / (c * s) + 1.0 / s**2 - l / (c * s**2)) * e
 
     # --------------------------------------------------------------- scales
     @property
@@ -208,6 +225,15 @@ def pair_list(x, y, cutoff):
     """
     x, y = _check_positions(x, y)
     cutoff = _positive(cutoff, "cutoff")
+    if x.size > 1:
+        diameter = np.hypot(np.ptp(x), np.ptp(y))
+        if diameter < cutoff:
+            return dense_pairs(x.size)  # every pair is within the cutoff (long-range kernel)
+        if cutoff > 0.25 * diameter and x.size <= 4000:
+            # a large share of all pairs is within reach: filtering them is cheaper than a tree
+            i, j = dense_pairs(x.size)
+            keep = (x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2 <= cutoff * cutoff
+            return i[keep], j[keep]
     tree = cKDTree(np.column_stack([x, y]))
     pairs = tree.query_pairs(cutoff, output_type="ndarray")
     if pairs.size == 0:
@@ -220,9 +246,21 @@ def pair_list(x, y, cutoff):
 
 
 def dense_pairs(N):
-    """All pairs ``i < j`` of ``N`` nodes (the exact path, ``N (N-1)/2`` pairs)."""
-    i, j = np.triu_indices(int(N), k=1)
-    return i.astype(np.intp), j.astype(np.intp)
+    """All pairs ``i < j`` of ``N`` nodes (the exact path, ``N (N-1)/2`` pairs).
+
+    The arrays are cached per ``N`` and read-only (they depend on ``N`` alone).
+    """
+    return _dense_pairs(int(N))
+
+
+@functools.lru_cache(maxsize=8)
+def _dense_pairs(N):
+    i, j = np.triu_indices(N, k=1)
+    i = i.astype(np.intp)
+    j = j.astype(np.intp)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
 
 
 def adhesion_pairs(kernel, x, y, *, method="neighbours", rel=1e-16):
@@ -319,60 +357,114 @@ def adhesion_fields(kernel, x, y, w, *, pairs=None, method="neighbours"):
     dx = x[i] - x[j]
     dy = y[i] - y[j]
     l = dx * dx + dy * dy
-    Av = kernel.A(l)
-    dAv = kernel.dA(l)
+    Av, dAv = kernel.derivatives(l, order=1)
     B = 2.0 * kernel.A0 * w
+    if np.all(w == w[0]):  # uniform weights (scaled arc length): fewer gathers
+        w0 = w[0]
+        B = B + 2.0 * w0 * (np.bincount(i, Av, N) + np.bincount(j, Av, N))
+        gx = dAv * dx
+        gy = dAv * dy
+        fx = 4.0 * w0 * (np.bincount(i, gx, N) - np.bincount(j, gx, N))
+        fy = 4.0 * w0 * (np.bincount(i, gy, N) - np.bincount(j, gy, N))
+        return B, np.column_stack([fx, fy])
     B = B + 2.0 * (np.bincount(i, Av * w[j], N) + np.bincount(j, Av * w[i], N))
     fx = 4.0 * (np.bincount(i, dAv * dx * w[j], N) - np.bincount(j, dAv * dx * w[i], N))
     fy = 4.0 * (np.bincount(i, dAv * dy * w[j], N) - np.bincount(j, dAv * dy * w[i], N))
     return B, np.column_stack([fx, fy])
 
 
-def adhesion_field_derivatives(kernel, x, y, w, *, pairs=None, method="neighbours"):
-    """Derivatives of ``B`` and ``force`` with respect to node positions (fixed ``w``).
+class PairDerivatives(NamedTuple):
+    """Per unordered pair ``(i, j)``, ``i < j``: ``d = X_i - X_j``, ``A'(|d|^2)`` and
+    the symmetric 2x2 matrix ``H = 2 A''(|d|^2) d d^T + A'(|d|^2) I``."""
 
-    For a directed pair ``(p, q)``, ``p != q``, with ``d = X_p - X_q``,
-    ``l = |d|^2``:
+    i: np.ndarray
+    j: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+    dA: np.ndarray
+    hxx: np.ndarray
+    hxy: np.ndarray
+    hyy: np.ndarray
+
+
+def adhesion_pair_derivatives(kernel, x, y, *, pairs=None, method="neighbours"):
+    """Pair terms of the derivatives of ``B`` and ``force`` with respect to positions.
+
+    For a directed pair ``(p, q)``, ``p != q``, ``d = X_p - X_q``, ``l = |d|^2``
+    and weights held fixed:
 
         dB_p/dX_q     = -4 w_q A'(l) d,
-        dforce_p/dX_q = -4 w_q (2 A''(l) d d^T + A'(l) I),
+        dforce_p/dX_q = -4 w_q H,     H = 2 A''(l) d d^T + A'(l) I,
 
-    and the diagonal blocks are ``dB_p/dX_p = force_p`` and
-    ``dforce_p/dX_p = -sum_q dforce_p/dX_q`` (translation invariance, weights
-    held fixed).
+    and the diagonal blocks are ``dB_p/dX_p = force_p``,
+    ``dforce_p/dX_p = 4 sum_q w_q H_pq`` (translation invariance). ``H`` is
+    the same for both orientations of a pair, ``d`` changes sign; so the terms
+    are returned once per unordered pair (O(P) memory, no 2x2xP arrays).
 
     Returns
     -------
-    p, q : ndarray of intp, shape (2P,)
-        Directed pairs (both orientations of each unordered pair).
-    dB : ndarray, shape (2P, 2)
-        ``dB_p / dX_q``.
-    dF : ndarray, shape (2P, 2, 2)
-        ``dforce_p / dX_q``; ``dF[k, a, b] = d force_p[a] / d X_q[b]``.
-    dB_diag : ndarray, shape (N, 2)
-        ``dB_p / dX_p``.
-    dF_diag : ndarray, shape (N, 2, 2)
-        ``dforce_p / dX_p``.
+    PairDerivatives
+        Fields ``i, j, dx, dy, dA, hxx, hxy, hyy``, each shape (P,).
+
+    See Also
+    --------
+    adhesion_field_jacobians : the assembled sparse matrices.
+    """
+    x, y = _check_positions(x, y)
+    i, j = _resolve_pairs(kernel, x, y, pairs, method)
+    dx = x[i] - x[j]
+    dy = y[i] - y[j]
+    l = dx * dx + dy * dy
+    _, dAv, d2Av = kernel.derivatives(l)
+    t = 2.0 * d2Av
+    return PairDerivatives(i, j, dx, dy, dAv, t * dx * dx + dAv, t * dx * dy, t * dy * dy + dAv)
+
+
+def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"):
+    """Sparse Jacobians of ``B`` and ``force`` with respect to the positions (fixed ``w``).
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : array_like, shape (N,)
+    w : float or array_like, shape (N,)
+    pairs, method
+        As in :func:`adhesion_energy`.
+
+    Returns
+    -------
+    JB : scipy.sparse.csr_matrix, shape (N, 2N)
+        ``dB_p / d(x, y)``; columns ordered ``[x_0..x_{N-1}, y_0..y_{N-1}]``.
+    JF : scipy.sparse.csr_matrix, shape (2N, 2N)
+        ``d(force_x, force_y) / d(x, y)``, rows ``[force_x; force_y]``.
     """
     x, y = _check_positions(x, y)
     N = x.size
     w = _weights(w, N)
-    i, j = _resolve_pairs(kernel, x, y, pairs, method)
-    p = np.concatenate([i, j])
-    q = np.concatenate([j, i])
-    d = np.column_stack([x[p] - x[q], y[p] - y[q]])
-    l = np.einsum("ka,ka->k", d, d)
-    dAv = kernel.dA(l)
-    d2Av = kernel.d2A(l)
-    wq = w[q]
-    dB = -4.0 * (wq * dAv)[:, None] * d
-    dF = -4.0 * wq[:, None, None] * (
-        2.0 * d2Av[:, None, None] * d[:, :, None] * d[:, None, :]
-        + dAv[:, None, None] * np.eye(2)[None, :, :]
-    )
-    dB_diag = -np.column_stack([np.bincount(p, dB[:, 0], N), np.bincount(p, dB[:, 1], N)])
-    dF_diag = np.zeros((N, 2, 2))
+    t = adhesion_pair_derivatives(kernel, x, y, pairs=pairs, method=method)
+    B, F = adhesion_fields(kernel, x, y, w, pairs=(t.i, t.j))
+    p = np.concatenate([t.i, t.j])
+    q = np.concatenate([t.j, t.i])
+    sgn = np.concatenate([np.ones(t.i.size), -np.ones(t.i.size)])
+    wq = -4.0 * w[q]
+    d = (np.concatenate([t.dx, t.dx]) * sgn, np.concatenate([t.dy, t.dy]) * sgn)
+    H = {(0, 0): np.tile(t.hxx, 2), (0, 1): np.tile(t.hxy, 2), (1, 1): np.tile(t.hyy, 2)}
+    H[(1, 0)] = H[(0, 1)]
+    n = np.arange(N)
+    rows, cols, vals = [], [], []
+    for b in range(2):
+        rows += [p, n]
+        cols += [b * N + q, b * N + n]
+        vals += [wq * np.tile(t.dA, 2) * d[b], F[:, b]]
+    JB = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(N, 2 * N))
+    rows, cols, vals = [], [], []
     for a in range(2):
         for b in range(2):
-            dF_diag[:, a, b] = -np.bincount(p, dF[:, a, b], N)
-    return p, q, dB, dF, dB_diag, dF_diag
+            v = wq * H[(a, b)]
+            rows += [a * N + p, a * N + n]
+            cols += [b * N + q, b * N + n]
+            vals += [v, -np.bincount(p, v, N)]
+    JF = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(2 * N, 2 * N))
+    return JB, JF

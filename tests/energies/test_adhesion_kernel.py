@@ -8,8 +8,9 @@ import pytest
 from qsa.energies.adhesion import (
     AdhesionKernel,
     adhesion_energy,
-    adhesion_field_derivatives,
+    adhesion_field_jacobians,
     adhesion_fields,
+    adhesion_pair_derivatives,
     adhesion_pairs,
     dense_pairs,
     pair_list,
@@ -171,22 +172,13 @@ def test_force_is_position_gradient_and_B_is_weight_gradient(method):
     assert np.max(np.abs(gw - B)) <= 1e-7 * np.max(np.abs(B))
 
 
-def test_field_derivatives_match_central_differences():
+def test_field_jacobians_match_central_differences():
     k = AdhesionKernel(A0=10.0, l_star=0.3, a=1.0)
     x, y, w = _random_setup(N=30, seed=4)
-    pairs = dense_pairs(x.size)
-    p, q, dB, dF, dBd, dFd = adhesion_field_derivatives(k, x, y, w, pairs=pairs)
     N = x.size
-    JB = np.zeros((N, 2 * N))
-    JF = np.zeros((2 * N, 2 * N))
-    JB[p, q] += dB[:, 0]
-    JB[p, N + q] += dB[:, 1]
-    JB[np.arange(N), np.arange(N)] += dBd[:, 0]
-    JB[np.arange(N), N + np.arange(N)] += dBd[:, 1]
-    for a in range(2):
-        for b in range(2):
-            JF[a * N + p, b * N + q] += dF[:, a, b]
-            JF[a * N + np.arange(N), b * N + np.arange(N)] += dFd[:, a, b]
+    pairs = dense_pairs(N)
+    JB, JF = adhesion_field_jacobians(k, x, y, w, pairs=pairs)
+    JB, JF = JB.toarray(), JF.toarray()
     d = 1e-6
     JBn = np.zeros_like(JB)
     JFn = np.zeros_like(JF)
@@ -199,6 +191,26 @@ def test_field_derivatives_match_central_differences():
         JFn[:, c] = np.concatenate([Fp[:, 0] - Fm[:, 0], Fp[:, 1] - Fm[:, 1]]) / (2 * d)
     assert np.max(np.abs(JB - JBn)) <= 1e-7 * np.max(np.abs(JBn))
     assert np.max(np.abs(JF - JFn)) <= 1e-7 * np.max(np.abs(JFn))
+    # the force is a gradient (w_i force_i = dE/dX_i): W JF is symmetric
+    W = np.concatenate([w, w])[:, None]
+    assert np.max(np.abs(W * JF - (W * JF).T)) <= 1e-12 * np.max(np.abs(W * JF))
+
+
+def test_pair_derivatives_fields():
+    k = PAPER_CHA
+    x, y, _ = _random_setup(N=20)
+    t = adhesion_pair_derivatives(k, x, y, method="dense")
+    l = t.dx**2 + t.dy**2
+    assert np.allclose(t.dA, k.dA(l), rtol=1e-14, atol=0)
+    assert np.allclose(t.hxy, 2 * k.d2A(l) * t.dx * t.dy, rtol=1e-13, atol=0)
+    assert np.allclose(t.hxx - t.hyy, 2 * k.d2A(l) * (t.dx**2 - t.dy**2), rtol=1e-12, atol=1e-12)
+
+
+def test_long_range_kernel_takes_every_pair_without_a_tree():
+    x, y = wobbly_curve(50)
+    i, j = pair_list(x, y, 100.0)
+    di, dj = dense_pairs(50)
+    assert np.array_equal(i, di) and np.array_equal(j, dj)
 
 
 def test_rigid_invariance_total_force_and_torque_vanish():
@@ -242,3 +254,13 @@ def test_parallel_strands_optimal_separation():
     # force = energy gradient: inside, moving the lower strand up (closer) raises the
     # energy (repulsion); beyond D0 it lowers it (adhesion).
     assert force_y(0.8 * D0) > 0 > force_y(1.2 * D0)
+
+
+@pytest.mark.parametrize("cutoff", [0.05, 0.6, 1.5, 5.0])
+def test_pair_list_paths_agree(cutoff):
+    # tree, filtered all-pairs and all-pairs paths return the same sorted pair set
+    x, y = wobbly_curve(300, seed=9)
+    i, j = pair_list(x, y, cutoff)
+    di, dj = dense_pairs(300)
+    keep = np.hypot(x[di] - x[dj], y[di] - y[dj]) <= cutoff
+    assert np.array_equal(i, di[keep]) and np.array_equal(j, dj[keep])

@@ -13,8 +13,8 @@ import numpy as np
 from qsa.energies.adhesion import (
     AdhesionKernel,
     adhesion_energy,
-    adhesion_field_derivatives,
     adhesion_fields,
+    adhesion_pair_derivatives,
     adhesion_pairs,
 )
 from qsa.flows.base import FlowModel
@@ -103,18 +103,23 @@ class CHASystem(CurveDAE):
         T.add(r, iY[jp], gy / (2 * h))
         T.add(r, iY[jm], -gy / (2 * h))
         if pairs is not None:
-            p, q, dB, dF, dBd, dFd = adhesion_field_derivatives(
-                self.kernel, X, Y, L / N, pairs=pairs
-            )
-            # row p, column X_q: kappa_p dB_p/dX_q + n_p^T dforce_p/dX_q
-            vx = kappa[p] * dB[:, 0] + nx[p] * dF[:, 0, 0] + ny[p] * dF[:, 1, 0]
-            vy = kappa[p] * dB[:, 1] + nx[p] * dF[:, 0, 1] + ny[p] * dF[:, 1, 1]
-            T.add(4 * N + p, q, vx)
-            T.add(4 * N + p, N + q, vy)
-            vx = kappa * dBd[:, 0] + nx * dFd[:, 0, 0] + ny * dFd[:, 1, 0]
-            vy = kappa * dBd[:, 1] + nx * dFd[:, 0, 1] + ny * dFd[:, 1, 1]
-            T.add(r, iX, vx)
-            T.add(r, iY, vy)
+            # kappa_p dB_p/dX_q + n_p^T dforce_p/dX_q, from per-pair terms (see
+            # adhesion_pair_derivatives): -4 w (kappa_p A' d_pq + H n_p), d_qp = -d_pq
+            t = adhesion_pair_derivatives(self.kernel, X, Y, pairs=pairs)
+            c4 = -4.0 * L / N
+            i, k = t.i, t.j
+            kd = kappa[i] * t.dA
+            T.add(4 * N + i, k, c4 * (kd * t.dx + nx[i] * t.hxx + ny[i] * t.hxy))
+            T.add(4 * N + i, N + k, c4 * (kd * t.dy + nx[i] * t.hxy + ny[i] * t.hyy))
+            kd = kappa[k] * t.dA
+            T.add(4 * N + k, i, c4 * (-kd * t.dx + nx[k] * t.hxx + ny[k] * t.hxy))
+            T.add(4 * N + k, N + i, c4 * (-kd * t.dy + nx[k] * t.hxy + ny[k] * t.hyy))
+            # diagonal: kappa_p force_p + n_p^T (4 w sum_q H_pq)
+            Sxx = np.bincount(i, t.hxx, N) + np.bincount(k, t.hxx, N)
+            Sxy = np.bincount(i, t.hxy, N) + np.bincount(k, t.hxy, N)
+            Syy = np.bincount(i, t.hyy, N) + np.bincount(k, t.hyy, N)
+            T.add(r, iX, kappa * force[:, 0] - c4 * (nx * Sxx + ny * Sxy))
+            T.add(r, iY, kappa * force[:, 1] - c4 * (nx * Sxy + ny * Syy))
 
     def energy(self, y):
         """``E = eps/2 sum kappa^2 w + beta/2 (L - rho L0)^2 + E_A``, ``w = L/N`` (e:CHA-Energy)."""

@@ -63,7 +63,8 @@ def equalize_chords(x, y, *, tol=1e-13, maxiter=30, max_spread=0.05):
     ----------
     x, y : ndarray, shape (N,)
     tol : float
-        Relative tolerance on ``max_j | |chord_j|^2 / c^2 - 1 |``.
+        Relative tolerance on ``max_j | |chord_j|^2 / c^2 - 1 |``, raised to the
+        round-off floor ``16 eps max|X| / c`` when that is larger (large N).
     maxiter : int
     max_spread : float
         Largest accepted relative spread ``ptp(chords) / mean(chords)`` of the
@@ -90,6 +91,9 @@ def equalize_chords(x, y, *, tol=1e-13, maxiter=30, max_spread=0.05):
             "(qsa.resample.resample_closed(x, y, N, method='chord'))"
         )
     c2 = np.mean(chords) ** 2
+    # round-off floor: a chord is a difference of coordinates of size max|X|
+    size = np.max(np.abs(x)) + np.max(np.abs(y))
+    tol = max(tol, 16 * np.finfo(float).eps * size / math.sqrt(c2))
     for _ in range(maxiter):
         ex = x[jp] - x
         ey = y[jp] - y
