@@ -15,7 +15,8 @@ from qsa.energies.adhesion import (
     adhesion_energy,
     adhesion_fields,
     adhesion_pair_derivatives,
-    adhesion_pairs,
+    dense_pairs,
+    pair_list,
 )
 from qsa.flows.base import FlowModel
 from qsa.flows.models.curve_dae import CurveDAE, _check_xy, _number, equalize_chords
@@ -32,6 +33,9 @@ class CHASystem(CurveDAE):
         super().__init__(x, y)
         self.model = model
         self.kernel = model.kernel
+        #: neighbour-list radius (``None`` without adhesion or on the dense path)
+        self.cutoff = (self.kernel.cutoff_distance()
+                       if self.kernel is not None and adhesion_method == "neighbours" else None)
         self.adhesion_method = adhesion_method
         x, y, L = equalize_chords(x, y)
         self.L0 = L
@@ -46,7 +50,10 @@ class CHASystem(CurveDAE):
         """Pairs, ``B`` and the force at weights ``w = L/N`` (or zeros without adhesion)."""
         if self.kernel is None:
             return None, np.zeros(self.N), np.zeros((self.N, 2))
-        pairs = adhesion_pairs(self.kernel, X, Y, method=self.adhesion_method)
+        if self.cutoff is None:
+            pairs = dense_pairs(self.N)
+        else:
+            pairs = pair_list(X, Y, self.cutoff)
         B, force = adhesion_fields(self.kernel, X, Y, L / self.N, pairs=pairs)
         return pairs, B, force
 

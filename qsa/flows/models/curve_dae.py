@@ -116,22 +116,42 @@ def equalize_chords(x, y, *, tol=1e-13, maxiter=30, max_spread=0.05):
 
 
 class _Triplets:
-    """COO accumulator for sparse Jacobian assembly (vectorised blocks)."""
+    """COO accumulator for sparse Jacobian assembly (vectorised blocks).
 
-    def __init__(self):
+    ``tocsc`` sums duplicates with one ``bincount`` over a column-major
+    (row, col) ordering. The ordering (a sort) is kept in ``pattern`` and reused
+    when the next matrix has exactly the same (row, col) list, which is checked
+    in full: the local stencil part never changes and a neighbour list changes
+    rarely. The values do not depend on whether the pattern was reused.
+    """
+
+    def __init__(self, pattern=None):
         self.rows, self.cols, self.vals = [], [], []
+        self.pattern = pattern
 
     def add(self, rows, cols, vals):
-        rows, cols, vals = np.broadcast_arrays(rows, cols, vals)
-        self.rows.append(rows.ravel())
-        self.cols.append(cols.ravel())
-        self.vals.append(np.asarray(vals, dtype=float).ravel())
+        n = max(np.size(rows), np.size(cols), np.size(vals))
+        self.rows.append(rows if np.size(rows) == n else np.full(n, rows, dtype=np.intp))
+        self.cols.append(cols if np.size(cols) == n else np.full(n, cols, dtype=np.intp))
+        self.vals.append(vals if np.size(vals) == n else np.full(n, vals, dtype=float))
 
     def tocsc(self, n):
-        return sp.csc_matrix(
-            (np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))),
-            shape=(n, n),
-        )
+        rows = np.concatenate(self.rows).astype(np.intp, copy=False)
+        cols = np.concatenate(self.cols).astype(np.intp, copy=False)
+        vals = np.concatenate(self.vals).astype(float, copy=False)
+        p = self.pattern
+        if p is None or not (np.array_equal(p["rows"], rows) and np.array_equal(p["cols"], cols)):
+            key = cols * n + rows
+            uniq, inverse = np.unique(key, return_inverse=True)
+            indptr = np.zeros(n + 1, dtype=np.intp)
+            np.cumsum(np.bincount(uniq // n, minlength=n), out=indptr[1:])
+            p = {"rows": rows, "cols": cols, "inverse": inverse.ravel(),
+                 "indices": (uniq % n).astype(np.intp), "indptr": indptr}
+            self.pattern = p
+        data = np.bincount(p["inverse"], vals, p["indices"].size)
+        J = sp.csc_matrix((data, p["indices"].copy(), p["indptr"].copy()), shape=(n, n))
+        J.has_sorted_indices = True
+        return J
 
 
 # ------------------------------------------------------------- the system
@@ -267,7 +287,7 @@ class CurveDAE(DAESystem):
         V = y[iV]
         iX, iY, iK, iL = j, N + j, 2 * N + j, self.iL
         tx, ty, d2x, d2y = self._geometry(X, Y)
-        T = _Triplets()
+        T = _Triplets(getattr(self, "_pattern", None))
         # normal motion: Xd ty - Yd tx - L V
         r = j
         T.add(r, iX[jp], -Yd / (2 * h))
@@ -308,7 +328,9 @@ class CurveDAE(DAESystem):
         T.add(r, iX, c * h * tx)
         T.add(r, iY, c * h * ty)
         self._model_jacobian(T, y, tx, ty)
-        return T.tocsc(self.size)
+        J = T.tocsc(self.size)
+        self._pattern = T.pattern
+        return J
 
     # ------------------------------------------------------- model hooks
     def _model_residual(self, y, tx, ty):  # pragma: no cover - abstract
