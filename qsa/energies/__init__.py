@@ -1,0 +1,23 @@
+"""Energies of closed curves: protocol, local first-order energies, faceting, Canham-Helfrich.
+
+Each energy provides ``energy``, ``gradient`` (nabla_I E in <f,h> = int f h dsigma),
+``normal_velocity`` (outward V^n) and ``hessian`` (nabla_I^2 E); energies add with ``+``.
+"""
+
+from qsa.energies.base import Energy, EnergySum, Perimeter
+from qsa.energies.faceting import DoubleWell, Faceting, Well
+from qsa.energies.helfrich import CanhamHelfrich
+from qsa.energies.local import Density, FirstOrderEnergy, LocalEnergy
+
+__all__ = [
+    "Energy",
+    "EnergySum",
+    "Perimeter",
+    "DoubleWell",
+    "Well",
+    "Faceting",
+    "CanhamHelfrich",
+    "Density",
+    "FirstOrderEnergy",
+    "LocalEnergy",
+]

@@ -1,0 +1,306 @@
+"""The intrinsic state of a closed planar curve: U = (kappa, g) on a periodic grid.
+
+A :class:`Curve` stores the curvature ``kappa`` and the arc-length density
+``g = |d gamma / ds|`` at the grid nodes, plus the base point ``gamma(0)`` and
+the base angle ``theta(0)``: together they fix the curve, rigid motion included.
+Everything else is derived (paper section 2, e:tau-n, e:theta-kappa, e:C1-e:C2):
+
+* ``theta = theta0 + D kappa``, with ``D f = int_0^s f dsigma``;
+* ``tau = (cos theta, sin theta)``, ``n = (sin theta, -cos theta)`` (outward for
+  counter-clockwise curves, MATH.md section 1);
+* ``gamma = gamma0 + D tau``;
+* the closure ``C(U) = (int tau dsigma, int kappa dsigma - 2 pi)``.
+
+Curves are immutable; ``with_kappa`` / ``with_g`` return modified copies.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from qsa.discretize import Fourier, Grid
+from qsa.resample import PeriodicInterpolant, closed_samples, equal_arclength_parameters
+
+__all__ = ["Curve", "polygon_self_intersects"]
+
+
+def _readonly(a, name, N):
+    a = np.array(a, dtype=float)
+    if a.ndim == 0:
+        a = np.full(N, float(a))
+    if a.shape != (N,):
+        raise ValueError(f"{name} has shape {a.shape}, but the grid has N={N} nodes")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or inf")
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Curve:
+    """A closed curve in intrinsic coordinates.
+
+    Parameters
+    ----------
+    kappa : array_like, shape (N,)
+        Signed curvature at the nodes (a counter-clockwise circle of radius R has
+        ``kappa = 1/R``).
+    g : array_like, shape (N,) or scalar
+        Arc-length density ``|d gamma/ds| > 0``; a scalar means constant g.
+    grid : Grid
+        The periodic grid (``FiniteDifference`` or ``Fourier``).
+    theta0 : float
+        Tangent angle at ``s = 0``.
+    origin : (float, float)
+        Base point ``gamma(0)``.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(2.0, Fourier(33))
+    >>> round(c.length(), 12), float(c.kappa[0])
+    (12.566370614359, 0.5)
+    """
+
+    kappa: np.ndarray
+    g: np.ndarray
+    grid: Grid
+    theta0: float = 0.0
+    origin: tuple = (0.0, 0.0)
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self):
+        if not isinstance(self.grid, Grid):
+            raise ValueError(f"grid must be a FiniteDifference or Fourier grid, got {self.grid!r}")
+        N = self.grid.N
+        object.__setattr__(self, "kappa", _readonly(self.kappa, "kappa", N))
+        g = _readonly(self.g, "g", N)
+        if np.any(g <= 0):
+            raise ValueError("g must be strictly positive (it is the arc-length density)")
+        object.__setattr__(self, "g", g)
+        theta0 = float(self.theta0)
+        origin = tuple(float(v) for v in np.asarray(self.origin, dtype=float).ravel())
+        if not np.isfinite(theta0) or len(origin) != 2 or not np.all(np.isfinite(origin)):
+            raise ValueError("theta0 must be a finite float and origin a finite (x, y) pair")
+        object.__setattr__(self, "theta0", theta0)
+        object.__setattr__(self, "origin", origin)
+
+    def __repr__(self):
+        return (f"Curve(N={self.N}, grid={self.grid!r}, L={self.length():.6g}, "
+                f"kappa in [{self.kappa.min():.4g}, {self.kappa.max():.4g}])")
+
+    # ----------------------------------------------------------- derived data
+    @property
+    def N(self) -> int:
+        return self.grid.N
+
+    @property
+    def dsigma(self) -> np.ndarray:
+        """Quadrature weights of ``dsigma = g ds``: ``int f dsigma ~= f @ c.dsigma``."""
+        return self.grid.weights * self.g
+
+    @property
+    def U(self) -> np.ndarray:
+        """Stacked unknowns ``[kappa, g]``, shape (2N,)."""
+        return np.concatenate([self.kappa, self.g])
+
+    def D(self, f) -> np.ndarray:
+        """The paper's ``D f = int_0^s f dsigma`` (e:D_def), at the nodes."""
+        f = np.asarray(f, dtype=float)
+        gg = self.g.reshape((-1,) + (1,) * (f.ndim - 1))
+        return self.grid.cumulative(f * gg)
+
+    def theta(self) -> np.ndarray:
+        """Tangent angle ``theta = theta0 + D kappa`` (e:theta-kappa), shape (N,)."""
+        if "theta" not in self._cache:
+            self._cache["theta"] = self.theta0 + self.D(self.kappa)
+        return self._cache["theta"]
+
+    def tangent(self) -> np.ndarray:
+        """Unit tangent ``tau = (cos theta, sin theta)``, shape (2, N)."""
+        th = self.theta()
+        return np.array([np.cos(th), np.sin(th)])
+
+    def normal(self) -> np.ndarray:
+        """Outward unit normal ``n = (sin theta, -cos theta)``, shape (2, N)."""
+        th = self.theta()
+        return np.array([np.sin(th), -np.cos(th)])
+
+    def positions(self) -> np.ndarray:
+        """Node positions ``gamma = gamma0 + D tau``, shape (2, N): ``x, y = c.positions()``."""
+        if "positions" not in self._cache:
+            tau = self.tangent()
+            self._cache["positions"] = np.asarray(self.origin)[:, None] + self.D(tau.T).T
+        return self._cache["positions"]
+
+    def length(self) -> float:
+        """Curve length ``L = int g ds``."""
+        return float(self.grid.integrate(self.g))
+
+    def closure(self) -> np.ndarray:
+        """Closure defect ``C(U) = (int tau dsigma, int kappa dsigma - 2 pi)``, shape (3,).
+
+        Zero for a smoothly closed curve (e:C1, e:C2), up to quadrature error.
+        """
+        tau = self.tangent()
+        return np.array([tau[0] @ self.dsigma, tau[1] @ self.dsigma,
+                         self.kappa @ self.dsigma - 2 * np.pi])
+
+    def grad_s(self, f) -> np.ndarray:
+        """Surface gradient ``nabla_s f = (1/g) df/ds`` at the nodes."""
+        return (self.grid.derivative() @ np.asarray(f, dtype=float)) / self.g
+
+    # ---------------------------------------------------------------- copies
+    def with_kappa(self, kappa) -> Curve:
+        """Copy with new curvature (same g, base point and angle)."""
+        return Curve(kappa, self.g, self.grid, self.theta0, self.origin)
+
+    def with_g(self, g) -> Curve:
+        """Copy with new arc-length density (same kappa, base point and angle)."""
+        return Curve(self.kappa, g, self.grid, self.theta0, self.origin)
+
+    def with_U(self, U) -> Curve:
+        """Copy from stacked unknowns ``U = [kappa, g]``, shape (2N,)."""
+        U = np.asarray(U, dtype=float)
+        if U.shape != (2 * self.N,):
+            raise ValueError(f"U has shape {U.shape}, expected ({2 * self.N},)")
+        return Curve(U[: self.N], U[self.N :], self.grid, self.theta0, self.origin)
+
+    def on_grid(self, grid: Grid) -> Curve:
+        """The same curve sampled on another grid (interpolating kappa and g)."""
+        return Curve(self.grid.resample(self.kappa, grid), self.grid.resample(self.g, grid),
+                     grid, self.theta0, self.origin)
+
+    def self_intersects(self) -> bool:
+        """Whether the node polygon crosses itself (non-adjacent segments intersect)."""
+        x, y = self.positions()
+        return polygon_self_intersects(x, y)
+
+    # ----------------------------------------------------------- constructors
+    @classmethod
+    def circle(cls, R, grid: Grid, center=(0.0, 0.0)) -> Curve:
+        """Counter-clockwise circle of radius ``R`` (``kappa = 1/R``, ``g = 2 pi R``).
+
+        The base point is ``center + (R, 0)``.
+        """
+        R = float(R)
+        if not (np.isfinite(R) and R > 0):
+            raise ValueError(f"R must be a positive radius, got {R}")
+        cx, cy = (float(v) for v in center)
+        return cls(np.full(grid.N, 1.0 / R), 2 * np.pi * R, grid, np.pi / 2, (cx + R, cy))
+
+    @classmethod
+    def polar(cls, r, grid: Grid, n_fine=None) -> Curve:
+        """Star-shaped curve ``gamma(phi) = r(phi) (cos phi, sin phi)``, constant g.
+
+        Parameters
+        ----------
+        r : callable
+            Vectorised ``r(phi) > 0`` on ``[0, 2 pi)``, smooth and periodic.
+        grid : Grid
+        n_fine : int, optional
+            Resolution of the internal trigonometric interpolant (default: 8N,
+            at least 2048, doubled until r's Fourier coefficients are resolved).
+
+        Notes
+        -----
+        The curve is resampled to constant arc length by Newton on the exact
+        (spectrally interpolated) arc-length function; curvature comes from the
+        interpolant's derivatives, ``kappa = (x'y'' - y'x'') / |gamma'|^3``.
+        """
+        if not callable(r):
+            raise ValueError("r must be a callable r(phi)")
+        M = int(n_fine or max(8 * grid.N, 2048))
+        for _ in range(6):
+            phi = 2 * np.pi * np.arange(M) / M
+            rv = np.asarray(r(phi), dtype=float)
+            if rv.shape != phi.shape or not np.all(np.isfinite(rv)) or np.any(rv <= 0):
+                raise ValueError("r(phi) must return finite positive values of the same shape")
+            rh = np.abs(np.fft.rfft(rv))
+            if rh[-M // 16 :].max() <= 1e-15 * rh.max() or n_fine:
+                break
+            M *= 2
+        return cls._from_interpolant(PeriodicInterpolant(rv * np.cos(phi), rv * np.sin(phi),
+                                                         "fourier"), grid)
+
+    @classmethod
+    def from_positions(cls, x, y, grid: Grid, interpolant="auto") -> Curve:
+        """Curve through closed samples, resampled to constant arc length.
+
+        Parameters
+        ----------
+        x, y : array_like, shape (M,)
+            Samples of a closed curve, counter-clockwise (the segment from the
+            last sample back to the first closes it; a repeated end point is
+            dropped). The first sample becomes the first node.
+        grid : Grid
+        interpolant : {"auto", "fourier", "spline"}
+            ``"auto"`` uses trigonometric interpolation on Fourier grids
+            (spectral accuracy for samples of a smooth curve at uniform parameter
+            values) and a periodic quintic spline otherwise.
+
+        Notes
+        -----
+        On finite-difference grids the curvature is computed from the resampled
+        positions with the grid's second-order stencils (as the paper's code does);
+        on Fourier grids from the interpolant's derivatives.
+        """
+        x, y = closed_samples(x, y, name="from_positions(x, y)")
+        if interpolant == "auto":
+            interpolant = "fourier" if isinstance(grid, Fourier) else "spline"
+        area = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+        if area <= 0:
+            raise ValueError("from_positions: the samples run clockwise (or enclose no area); "
+                             "pass them counter-clockwise")
+        return cls._from_interpolant(PeriodicInterpolant(x, y, interpolant), grid,
+                                     stencil_kappa=grid.sparse)
+
+    @classmethod
+    def _from_interpolant(cls, curve: PeriodicInterpolant, grid: Grid,
+                          stencil_kappa=False) -> Curve:
+        t, L = equal_arclength_parameters(curve, grid.N)
+        z1 = curve.derivative(t, 1)
+        if stencil_kappa:
+            # Finite-difference grids: curvature from the resampled positions with the
+            # grid's stencils (the paper's preprocessing), whose O(h^2) error is smooth.
+            z = curve.derivative(t)
+            D, D2 = grid.derivative(), grid.second_derivative()
+            x1, y1, x2, y2 = D @ z.real, D @ z.imag, D2 @ z.real, D2 @ z.imag
+            kappa = (x1 * y2 - y1 * x2) / np.hypot(x1, y1) ** 3
+        else:
+            z2 = curve.derivative(t, 2)
+            kappa = (z1.real * z2.imag - z1.imag * z2.real) / np.abs(z1) ** 3
+        z0 = curve.derivative(t[:1])[0]
+        return cls(kappa, L, grid, float(np.angle(z1[0])), (z0.real, z0.imag))
+
+
+def polygon_self_intersects(x, y) -> bool:
+    """Whether the closed polygon through ``(x_j, y_j)`` has crossing non-adjacent edges.
+
+    Candidate edge pairs come from a k-d tree on edge midpoints (radius = the
+    longest edge), so the cost is about O(N log N) for evenly sampled curves.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    N = x.size
+    P = np.column_stack([x, y])
+    Q = np.roll(P, -1, axis=0)
+    mid = 0.5 * (P + Q)
+    lmax = np.max(np.linalg.norm(Q - P, axis=1))
+    pairs = cKDTree(mid).query_pairs(r=lmax * (1 + 1e-9), output_type="ndarray")
+    if pairs.size == 0:
+        return False
+    i, j = pairs[:, 0], pairs[:, 1]
+    adjacent = (np.abs(i - j) == 1) | (np.abs(i - j) == N - 1)
+    i, j = i[~adjacent], j[~adjacent]
+
+    def orient(a, b, c):
+        return np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                       - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+
+    a, b, c, d = P[i], Q[i], P[j], Q[j]
+    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+    return bool(np.any((o1 * o2 < 0) & (o3 * o4 < 0)))

@@ -1,0 +1,175 @@
+"""The Energy protocol, sums of energies, and the perimeter penalty.
+
+Every energy provides, for a :class:`~qsa.curve.Curve` ``c``:
+
+``energy(c) -> float``
+    The discrete energy.
+``gradient(c) -> ndarray (2N,)``
+    ``nabla_I E = (d_kappa E, d_g E)`` with respect to ``<f, h> = int f h dsigma``:
+    ``d/d delta E(U + delta U1) = <nabla_I E, U1>`` exactly (for the discrete
+    energy and the discrete inner product ``sum f h dsigma``).
+``hessian(c) -> matrix (2N, 2N)``
+    ``nabla_I^2 E`` with respect to ``<.,.>``: ``d^2/d delta^2 E(U + delta U1) =
+    <H U1, U1>`` along straight paths; dsigma-self-adjoint.
+``normal_velocity(c) -> ndarray (N,)``
+    ``V^n = -[M-dagger nabla_I E]_1 = -G d_kappa E - kappa (g d_g E)`` (e:L2grad),
+    outward; the L2(dsigma) gradient flow dissipates ``dE/dt = -int (V^n)^2 dsigma``.
+
+Energies add: ``Faceting(...) + Perimeter(...)`` is an :class:`EnergySum`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from qsa.curve import Curve
+from qsa.linalg import SparsePlusLowRank
+
+__all__ = ["Energy", "EnergySum", "Perimeter", "add_matrices"]
+
+
+def add_matrices(a, b):
+    """Sum of two operator matrices of possibly different kinds (dense, sparse, low rank)."""
+    if isinstance(b, SparsePlusLowRank) and not isinstance(a, SparsePlusLowRank):
+        return b + a
+    if sp.issparse(a) and isinstance(b, np.ndarray):
+        return b + a.toarray()
+    return a + b
+
+
+def _check_param(value, name, positive=False, nonnegative=False):
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value}")
+    if positive and value <= 0:
+        raise ValueError(f"{name} must be positive, got {value}")
+    if nonnegative and value < 0:
+        raise ValueError(f"{name} must be non-negative, got {value}")
+    return value
+
+
+class Energy(ABC):
+    """An energy of a closed curve in intrinsic coordinates (see the module docstring)."""
+
+    @abstractmethod
+    def energy(self, c: Curve) -> float: ...
+
+    @abstractmethod
+    def gradient(self, c: Curve) -> np.ndarray: ...
+
+    @abstractmethod
+    def hessian(self, c: Curve): ...
+
+    def normal_velocity(self, c: Curve) -> np.ndarray:
+        """Outward normal velocity ``V^n = -G d_kappa E - kappa (g d_g E)`` (e:L2grad), (N,)."""
+        from qsa.geometry import helmholtz
+
+        grad = self.gradient(c)
+        N = c.N
+        return -(helmholtz(c) @ grad[:N]) - c.kappa * (c.g * grad[N:])
+
+    def terms(self) -> tuple:
+        """The summands (a single energy is its own only term)."""
+        return (self,)
+
+    def __add__(self, other):
+        if not isinstance(other, Energy):
+            return NotImplemented
+        return EnergySum(self.terms() + other.terms())
+
+    def params(self) -> dict:
+        """JSON-serialisable parameters, with the energy's class name."""
+        out = {"energy": type(self).__name__}
+        for k, v in getattr(self, "__dict__", {}).items():
+            if isinstance(v, (int, float, str)):
+                out[k] = v
+        return out
+
+
+@dataclass(frozen=True)
+class EnergySum(Energy):
+    """Sum of energies; each method adds its summands' results."""
+
+    parts: tuple
+
+    def terms(self):
+        return tuple(self.parts)
+
+    def energy(self, c):
+        return float(sum(e.energy(c) for e in self.parts))
+
+    def gradient(self, c):
+        return sum(e.gradient(c) for e in self.parts)
+
+    def hessian(self, c):
+        H = self.parts[0].hessian(c)
+        for e in self.parts[1:]:
+            H = add_matrices(H, e.hessian(c))
+        return H
+
+    def normal_velocity(self, c):
+        return sum(e.normal_velocity(c) for e in self.parts)
+
+    def params(self):
+        return {"energy": "sum", "terms": [e.params() for e in self.parts]}
+
+    def __repr__(self):
+        return " + ".join(repr(e) for e in self.parts)
+
+
+@dataclass(frozen=True)
+class Perimeter(Energy):
+    """Perimeter penalty ``beta/2 (L - L*)^2``, ``L = int g ds`` (e:Facet).
+
+    Parameters
+    ----------
+    beta : float
+        Penalty strength, ``>= 0``.
+    L_star : float
+        Reference length, ``> 0``.
+
+    Notes
+    -----
+    Gradient ``(0, beta (L - L*) / g)``. The Hessian is rank one,
+    ``(H U1)_g = (beta / g) int g1 ds`` (MATH.md section 4); on finite-difference
+    grids it is returned factored as :class:`~qsa.linalg.SparsePlusLowRank`.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> from qsa.energies import Perimeter
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> round(Perimeter(beta=2.0, L_star=6.0).energy(c), 10)
+    0.0799474824
+    """
+
+    beta: float
+    L_star: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "beta", _check_param(self.beta, "beta", nonnegative=True))
+        object.__setattr__(self, "L_star", _check_param(self.L_star, "L_star", positive=True))
+
+    def energy(self, c):
+        return 0.5 * self.beta * (c.length() - self.L_star) ** 2
+
+    def gradient(self, c):
+        return np.concatenate([np.zeros(c.N), self.beta * (c.length() - self.L_star) / c.g])
+
+    def normal_velocity(self, c):
+        return -self.beta * (c.length() - self.L_star) * c.kappa
+
+    def hessian(self, c):
+        N = c.N
+        U = np.concatenate([np.zeros(N), self.beta / c.g])
+        V = np.concatenate([np.zeros(N), c.grid.weights])
+        if c.grid.sparse:
+            return SparsePlusLowRank(sp.csr_matrix((2 * N, 2 * N)), U, V)
+        return np.outer(U, V)

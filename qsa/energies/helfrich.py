@@ -1,0 +1,42 @@
+"""Canham-Helfrich bending energy ``int eps/2 kappa^2 dsigma`` (e:CHA-Energy, curvature part).
+
+With ``Perimeter(beta, L_star)`` its normal velocity is
+``V^n = eps (Delta_s kappa + kappa^3/2) - beta (L - L*) kappa`` (MATH.md section 3;
+e:NV-CH with the length penalty in place of the constant surface tension).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from qsa.energies.base import _check_param
+from qsa.energies.local import LocalEnergy, curvature_density
+
+__all__ = ["CanhamHelfrich"]
+
+
+class CanhamHelfrich(LocalEnergy):
+    """Canham-Helfrich energy ``eps/2 int kappa^2 dsigma``.
+
+    Parameters
+    ----------
+    eps : float
+        Bending rigidity, ``>= 0``.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> round(CanhamHelfrich(eps=2.0).energy(Curve.circle(1.0, Fourier(17))), 12)
+    6.283185307179
+    """
+
+    def __init__(self, eps):
+        self.eps = _check_param(eps, "eps", nonnegative=True)
+
+    def densities(self):
+        e = self.eps
+        return (curvature_density(lambda k: 0.5 * e * k**2, lambda k: e * k,
+                                  lambda k: np.full_like(np.asarray(k, dtype=float), e)),)
+
+    def __repr__(self):
+        return f"CanhamHelfrich(eps={self.eps})"

@@ -1,0 +1,212 @@
+"""First-order local energies ``E = int F(nabla_s kappa, kappa) dsigma`` (e:FOE).
+
+Discretization
+--------------
+A density term ``f(p, k)`` (``p = nabla_s kappa``) is placed either on the
+grid's *edges* or on its *nodes*:
+
+* edge terms: ``E = sum_e w_e g_e f(p_e, k_e)`` with ``p_e = (E kappa)_e / g_e``,
+  ``k_e = (A kappa)_e``, ``g_e = (A g)_e`` — ``E`` the grid's edge difference
+  and ``A`` its edge average (midpoints for finite differences, which gives
+  the compact Laplacian; the nodes themselves for Fourier);
+* node terms: ``E = sum_j w_j g_j f(p_j, kappa_j)`` (for densities of kappa only).
+
+The faceting energy puts ``alpha^2/2 |nabla_s kappa|^2`` on edges and ``W(kappa)``
+on nodes; Canham-Helfrich puts ``eps/2 kappa^2`` on nodes. With the linear maps
+``q = E kappa``, ``k_e = A kappa``, ``g_e = A g`` and ``Phi(g_e, q, k_e) =
+g_e f(q/g_e, k_e)``, the exact derivatives of the discrete energy are
+
+    dE/dkappa = E^T (w f_p) + A^T (w g_e f_k),   dE/dg = A^T (w (f - p f_p)),
+
+and the Euclidean Hessian is ``T^T B T`` with ``T = [[E, 0], [A, 0], [0, A]]`` and
+the 3x3 block of diagonals ``B = w * d^2 Phi``. The ``<.,.>`` gradient and
+Hessian divide rows by ``dsigma``. In the continuum these are e:FoE_IG,
+``nabla_I E = (-nabla_s F_1 + F_0, (-F_1 nabla_s kappa + F)/g)``, and e:cF-Hessian
+(MATH.md: that printed Hessian is right).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from qsa.curve import Curve
+from qsa.energies.base import Energy, _check_param
+
+__all__ = ["Density", "LocalEnergy", "FirstOrderEnergy"]
+
+
+@dataclass(frozen=True)
+class Density:
+    """A density ``f(p, k)`` with its first and second partial derivatives.
+
+    Parameters
+    ----------
+    f, f_p, f_k, f_pp, f_pk, f_kk : callable
+        Vectorised functions of ``(p, k)``; ``p = nabla_s kappa``, ``k = kappa``.
+    placement : {"edge", "node"}
+        Where the density is evaluated (see the module docstring). Use "node"
+        only for densities that do not depend on ``p``.
+    uses_p : bool
+        Whether the density depends on ``p``.
+    """
+
+    f: object
+    f_p: object
+    f_k: object
+    f_pp: object
+    f_pk: object
+    f_kk: object
+    placement: str = "edge"
+    uses_p: bool = True
+
+    def __post_init__(self):
+        if self.placement not in ("edge", "node"):
+            raise ValueError(f"placement must be 'edge' or 'node', got {self.placement!r}")
+
+
+def _maps(c: Curve, term: Density):
+    grid = c.grid
+    if term.placement == "edge":
+        Ed, A, w = grid.edge_difference(), grid.edge_average(), grid.edge_weights
+    else:
+        Ed, A, w = grid.derivative(), grid.identity(), grid.weights
+    ge = A @ c.g
+    ke = A @ c.kappa
+    p = (Ed @ c.kappa) / ge if term.uses_p else np.zeros_like(ke)
+    return Ed, A, w, ge, ke, p
+
+
+def _as_array(v, like):
+    return np.broadcast_to(np.asarray(v, dtype=float), like.shape)
+
+
+class LocalEnergy(Energy):
+    """Sum of local density terms (see the module docstring); subclasses define ``densities``."""
+
+    def densities(self) -> tuple:
+        raise NotImplementedError
+
+    def energy(self, c):
+        total = 0.0
+        for t in self.densities():
+            _, _, w, ge, ke, p = _maps(c, t)
+            total += float(np.sum(w * ge * _as_array(t.f(p, ke), ke)))
+        return total
+
+    def euclidean_gradient(self, c) -> np.ndarray:
+        """``(dE/dkappa_j, dE/dg_j)``: plain partial derivatives, shape (2N,)."""
+        dk = np.zeros(c.N)
+        dg = np.zeros(c.N)
+        for t in self.densities():
+            Ed, A, w, ge, ke, p = _maps(c, t)
+            f = _as_array(t.f(p, ke), ke)
+            fk = _as_array(t.f_k(p, ke), ke)
+            dk += A.T @ (w * ge * fk)
+            if t.uses_p:
+                fp = _as_array(t.f_p(p, ke), ke)
+                dk += Ed.T @ (w * fp)
+                dg += A.T @ (w * (f - p * fp))
+            else:
+                dg += A.T @ (w * f)
+        return np.concatenate([dk, dg])
+
+    def gradient(self, c):
+        """``nabla_I E`` in ``<.,.>`` (e:FoE_IG), shape (2N,)."""
+        ds = c.dsigma
+        return self.euclidean_gradient(c) / np.concatenate([ds, ds])
+
+    def euclidean_hessian(self, c):
+        """Second partial derivatives of the discrete energy, shape (2N, 2N), symmetric."""
+        grid = c.grid
+        N = c.N
+        total = None
+        for t in self.densities():
+            Ed, A, w, ge, ke, p = _maps(c, t)
+            f = _as_array(t.f(p, ke), ke)
+            fk = _as_array(t.f_k(p, ke), ke)
+            fkk = _as_array(t.f_kk(p, ke), ke)
+            D = grid.diag
+            Z = None
+            if t.uses_p:
+                fpp = _as_array(t.f_pp(p, ke), ke)
+                fpk = _as_array(t.f_pk(p, ke), ke)
+                # Phi = g_e f(q/g_e, k_e); second derivatives in (q, k_e, g_e):
+                Bqq, Bqk, Bqg = w * fpp / ge, w * fpk, -w * p * fpp / ge
+                Bkk, Bkg, Bgg = w * ge * fkk, w * (fk - p * fpk), w * p**2 * fpp / ge
+                T = [Ed, A]
+                kk = (T[0].T @ D(Bqq) @ T[0] + T[0].T @ D(Bqk) @ T[1]
+                      + T[1].T @ D(Bqk) @ T[0] + T[1].T @ D(Bkk) @ T[1])
+                kg = T[0].T @ D(Bqg) @ A + T[1].T @ D(Bkg) @ A
+                gg = A.T @ D(Bgg) @ A
+            else:
+                kk = A.T @ D(w * ge * fkk) @ A
+                kg = A.T @ D(w * fk) @ A
+                gg = Z
+            blocks = [[kk, kg], [kg.T, gg]]
+            if grid.sparse:
+                import scipy.sparse as sp
+
+                H = sp.bmat(blocks, format="csr", dtype=float) if gg is not None else \
+                    sp.bmat([[kk, kg], [kg.T, sp.csr_matrix((N, N))]], format="csr")
+            else:
+                H = np.block([[kk, kg], [kg.T, gg if gg is not None else np.zeros((N, N))]])
+            total = H if total is None else total + H
+        return total
+
+    def hessian(self, c):
+        """``nabla_I^2 E`` in ``<.,.>`` (e:cF-Hessian), shape (2N, 2N); dsigma-self-adjoint."""
+        ds = c.dsigma
+        winv = 1.0 / np.concatenate([ds, ds])
+        H = self.euclidean_hessian(c)
+        if c.grid.sparse:
+            import scipy.sparse as sp
+
+            return (sp.diags(winv) @ H).tocsr()
+        return H * winv[:, None]
+
+
+class FirstOrderEnergy(LocalEnergy):
+    """A user-defined first-order energy ``int F(nabla_s kappa, kappa) dsigma``.
+
+    Parameters
+    ----------
+    F, F_p, F_k, F_pp, F_pk, F_kk : callable
+        The density and its partial derivatives, vectorised in ``(p, k)``
+        (``F_1 = F_p``, ``F_0 = F_k`` in the paper's notation).
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> E = FirstOrderEnergy(F=lambda p, k: 0.5 * k**2, F_p=lambda p, k: 0 * p,
+    ...     F_k=lambda p, k: k, F_pp=lambda p, k: 0 * p, F_pk=lambda p, k: 0 * p,
+    ...     F_kk=lambda p, k: 1 + 0 * k)
+    >>> round(E.energy(Curve.circle(1.0, Fourier(17))), 12)  # = pi for the unit circle
+    3.14159265359
+    """
+
+    def __init__(self, F, F_p, F_k, F_pp, F_pk, F_kk):
+        for name, fn in dict(F=F, F_p=F_p, F_k=F_k, F_pp=F_pp, F_pk=F_pk, F_kk=F_kk).items():
+            if not callable(fn):
+                raise ValueError(f"{name} must be callable")
+        self._density = Density(F, F_p, F_k, F_pp, F_pk, F_kk, placement="edge")
+
+    def densities(self):
+        return (self._density,)
+
+
+def quadratic_gradient_density(coef: float) -> Density:
+    """``coef/2 |p|^2`` on edges."""
+    coef = _check_param(coef, "coefficient", nonnegative=True)
+    zero = lambda p, k: np.zeros_like(p)
+    return Density(f=lambda p, k: 0.5 * coef * p**2, f_p=lambda p, k: coef * p, f_k=zero,
+                   f_pp=lambda p, k: np.full_like(p, coef), f_pk=zero, f_kk=zero,
+                   placement="edge")
+
+
+def curvature_density(F, dF, d2F) -> Density:
+    """A density of kappa alone, ``F(kappa)``, on nodes."""
+    zero = lambda p, k: np.zeros_like(k)
+    return Density(f=lambda p, k: F(k), f_p=zero, f_k=lambda p, k: dF(k), f_pp=zero, f_pk=zero,
+                   f_kk=lambda p, k: d2F(k), placement="node", uses_p=False)

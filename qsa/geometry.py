@@ -1,0 +1,223 @@
+"""Operators of the intrinsic formulation: M, its dsigma-adjoint, kernels, constraint Hessians.
+
+All adjoints are taken in ``<f, h> = int f h dsigma`` (MATH.md section 1); the
+discrete adjoint of a matrix ``A`` is ``W^{-1} A^T W`` with ``W = diag(dsigma)``
+(block-diagonal on stacked ``[kappa, g]``).
+
+Discrete operators (finite differences use the paper's second-order stencils):
+
+* ``grad_s = diag(1/g) d/ds`` (skew in dsigma: d/ds is skew-symmetric);
+* ``laplace_s = -diag(1/g) E^T diag(1/g_e) E`` with the grid's edge difference
+  ``E`` and edge values ``g_e`` of g: compact, dsigma-self-adjoint, and for
+  constant g the usual 3-point (FD) or spectral (Fourier) second derivative;
+* ``G = -laplace_s - kappa^2`` (the surface Helmholtz operator);
+* ``M = [[G, diag(grad_s kappa)], [diag(g kappa), diag(g) grad_s]]`` (e:Meq).
+
+Notes
+-----
+Equations: e:Meq, e:FSFF (M), e:CVE (M-dagger), lem:kerM (rigid motions),
+e:Psi1-e:Psi3 (Psi, in the position form of MATH.md section 2), e:cC-Hessian
+and e:cC-Hessian3 (constraint Hessians; the printed ones are wrong, see the
+NOTE in :func:`constraint_hessians`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from qsa.curve import Curve
+
+__all__ = [
+    "grad_s",
+    "laplace_s",
+    "helmholtz",
+    "M",
+    "M_adjoint",
+    "MMdagger",
+    "adjoint",
+    "rigid_motions",
+    "constraint_gradients",
+    "constraint_hessians",
+    "D_matrix",
+    "D_adjoint_matrix",
+    "reparameterization_mode",
+]
+
+
+def _bmat(blocks, grid):
+    if grid.sparse:
+        return sp.bmat(blocks, format="csr")
+    return np.block([[b if b is not None else np.zeros((grid.N, grid.N)) for b in row]
+                     for row in blocks])
+
+
+def grad_s(c: Curve):
+    """``nabla_s = (1/g) d/ds`` as a matrix, shape (N, N)."""
+    return c.grid.diag(1.0 / c.g) @ c.grid.derivative()
+
+
+def laplace_s(c: Curve):
+    """Laplace-Beltrami ``Delta_s = nabla_s nabla_s``, compact and dsigma-self-adjoint, (N, N)."""
+    grid = c.grid
+    E = grid.edge_difference()
+    ge = grid.edge_average() @ c.g
+    return -(grid.diag(1.0 / c.g) @ (E.T @ (grid.diag(1.0 / ge) @ E)))
+
+
+def helmholtz(c: Curve):
+    """``G = -Delta_s - kappa^2``, shape (N, N)."""
+    return -laplace_s(c) - c.grid.diag(c.kappa**2)
+
+
+def M(c: Curve):
+    """The map from extrinsic velocities (V^n, V^tau) to U_t = (kappa_t, g_t) (e:Meq).
+
+    Returns
+    -------
+    matrix, shape (2N, 2N)
+        Sparse CSR for finite differences, dense for Fourier.
+    """
+    grid = c.grid
+    ks = c.grad_s(c.kappa)
+    return _bmat([[helmholtz(c), grid.diag(ks)],
+                  [grid.diag(c.g * c.kappa), grid.diag(c.g) @ grad_s(c)]], grid)
+
+
+def adjoint(c: Curve, A):
+    """dsigma-adjoint ``W^{-1} A^T W`` of a (2N, 2N) or (N, N) matrix ``A``."""
+    w = c.dsigma
+    if A.shape[0] == 2 * c.N:
+        w = np.concatenate([w, w])
+    if sp.issparse(A):
+        return (sp.diags(1.0 / w) @ A.T @ sp.diags(w)).tocsr()
+    return (A.T * w[None, :]) / w[:, None]
+
+
+def M_adjoint(c: Curve):
+    """dsigma-adjoint of :func:`M`: ``[[G, g kappa], [grad_s kappa, -grad_s(g .)]]`` (e:CVE)."""
+    return adjoint(c, M(c))
+
+
+def MMdagger(c: Curve):
+    """The geometric prefactor ``M M-dagger`` built as the product.
+
+    # NOTE: the paper's printed MM-dagger display has wrong (2,1) and (2,2)
+    # entries (MATH.md section 2); the product is exact by construction.
+    """
+    return M(c) @ M_adjoint(c)
+
+
+def rigid_motions(c: Curve) -> np.ndarray:
+    """Extrinsic fields of the rigid motions (lem:kerM), shape (3, 2N).
+
+    Rows: translation along e1 ``(e1.n, e1.tau)``, along e2 ``(e2.n, e2.tau)``,
+    and rotation about the origin ``(gamma.tau, -gamma.n)``.
+    """
+    tau, n = c.tangent(), c.normal()
+    gam = c.positions()
+    return np.array([
+        np.concatenate([n[0], tau[0]]),
+        np.concatenate([n[1], tau[1]]),
+        np.concatenate([np.sum(gam * tau, 0), -np.sum(gam * n, 0)]),
+    ])
+
+
+def constraint_gradients(c: Curve) -> np.ndarray:
+    """``Psi_j = nabla_I C_j`` in ``<.,.>``, spanning ker M-dagger, shape (3, 2N).
+
+    Notes
+    -----
+    # NOTE: position form (MATH.md section 2): Psi1 = (y - y0, (kappa (y - y0) + tau_x)/g),
+    # Psi2 = (-(x - x0), (-kappa (x - x0) + tau_y)/g), Psi3 = (1, kappa/g). It equals
+    # the paper's D-dagger form e:Psi1-e:Psi2 on closed curves but, unlike it, converges
+    # with second-order differences.
+    """
+    x, y = c.positions()
+    x0, y0 = c.origin
+    tau = c.tangent()
+    k, g = c.kappa, c.g
+    return np.array([
+        np.concatenate([y - y0, (k * (y - y0) + tau[0]) / g]),
+        np.concatenate([-(x - x0), (-k * (x - x0) + tau[1]) / g]),
+        np.concatenate([np.ones_like(k), k / g]),
+    ])
+
+
+def D_matrix(c: Curve) -> np.ndarray:
+    """Dense matrix of ``D f = int_0^s f dsigma`` (e:D_def), shape (N, N)."""
+    return c.grid.cumulative_matrix() * c.g[None, :]
+
+
+def D_adjoint_matrix(c: Curve) -> np.ndarray:
+    """Dense matrix of ``D-dagger f = int_s^1 f dsigma = int f dsigma - D f``, shape (N, N)."""
+    return c.dsigma[None, :] - D_matrix(c)
+
+
+def constraint_hessians(c: Curve) -> list:
+    """Second variations of the closure constraints ``C_1, C_2, C_3``.
+
+    With ``C(U + delta U1) = C + delta <Psi, U1> + delta^2/2 <H_C U1, U1>``.
+
+    Returns
+    -------
+    list of three matrices, shape (2N, 2N)
+        ``H_C1``, ``H_C2`` are dense (they contain the integral operators D and
+        D-dagger, O(N^2) memory); ``H_C3`` has the grid's matrix type. Each is
+        exactly dsigma-self-adjoint (H_C1 and H_C2 are symmetrised).
+
+    Notes
+    -----
+    # NOTE: e:cC-Hessian and e:cC-Hessian3 as printed are wrong (MATH.md section 4).
+    # Implemented: H_C3 = [[0, 1/g], [1/g, 0]], and for j = 1, 2 with
+    # eta = kappa1 + kappa g1/g, B = D-dagger(tau'_j g1/g), C = D-dagger(tau_j D eta):
+    #   (H_Cj U1)_kappa = (g1/g) D-dagger tau'_j + B - C,
+    #   (H_Cj U1)_g     = (kappa1/g) D-dagger tau'_j + tau'_j (D eta)/g + (kappa/g)(B - C).
+    # D acts on integrands that are not periodic off the constraint manifold: with
+    # finite differences (trapezoid) that is second order; on Fourier grids the
+    # cumulative integral of a non-periodic integrand is only first order.
+    """
+    grid = c.grid
+    N = c.N
+    k, g = c.kappa, c.g
+    th = c.theta()
+    tau = np.array([np.cos(th), np.sin(th)])
+    taup = np.array([-np.sin(th), np.cos(th)])  # d tau / d theta = -n
+    D = D_matrix(c)
+    Dd = D_adjoint_matrix(c)
+    # eta = [I, diag(k/g)] U1 ; D eta
+    Eta = np.hstack([np.eye(N), np.diag(k / g)])
+    DEta = D @ Eta
+    hessians = []
+    for j in range(2):
+        Dd_taup = Dd @ taup[j]
+        Bop = Dd @ np.hstack([np.zeros((N, N)), np.diag(taup[j] / g)])
+        Cop = Dd @ (tau[j][:, None] * DEta)
+        BC = Bop - Cop
+        top = np.hstack([np.zeros((N, N)), np.diag(Dd_taup / g)]) + BC
+        bottom = (np.hstack([np.diag(Dd_taup / g), np.zeros((N, N))])
+                  + (taup[j] / g)[:, None] * DEta + (k / g)[:, None] * BC)
+        H = np.vstack([top, bottom])
+        # The quadratic form is what is defined; symmetrise in dsigma (exactly self-adjoint).
+        hessians.append(0.5 * (H + adjoint(c, H)))
+    inv_g = grid.diag(1.0 / g)
+    hessians.append(_bmat([[None, inv_g], [inv_g, None]], grid) if grid.sparse
+                    else np.block([[np.zeros((N, N)), np.diag(1 / g)],
+                                   [np.diag(1 / g), np.zeros((N, N))]]))
+    return hessians
+
+
+def reparameterization_mode(c: Curve, v) -> np.ndarray:
+    """``M (0, v) = (v nabla_s kappa, g nabla_s v)``: the intrinsic change under a tangential flow.
+
+    Parameters
+    ----------
+    v : array_like, shape (N,)
+        Tangential velocity.
+
+    Returns
+    -------
+    ndarray, shape (2N,)
+    """
+    v = np.asarray(v, dtype=float)
+    return np.concatenate([v * c.grad_s(c.kappa), c.g * c.grad_s(v)])
