@@ -9,30 +9,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from qsa.energies import DoubleWell
 from qsa.flows.base import FlowModel
 from qsa.flows.models.curve_dae import CurveDAE, _check_xy, _number, equalize_chords
 
+
+def _as_well(well, kstar):
+    """``DoubleWell(kstar)`` by default; a user well must have callables W, dW, d2W."""
+    if well is None:
+        return DoubleWell(kstar)
+    for name in ("W", "dW", "d2W"):
+        if not callable(getattr(well, name, None)):
+            raise ValueError(f"well must provide callables W, dW and d2W; {name} is missing")
+    return well
+
 __all__ = ["FacetingFlow", "FacetingSystem"]
-
-
-class _QuarticWell:
-    """The default double well ``W = k^2 (k - k*)^2 / 4`` (MATH.md section 1)."""
-
-    def __init__(self, kstar):
-        self.kstar = float(kstar)
-
-    def W(self, k):
-        return 0.25 * k**2 * (k - self.kstar) ** 2
-
-    def dW(self, k):
-        return 0.5 * k * (k - self.kstar) * (2 * k - self.kstar)
-
-    def d2W(self, k):
-        ks = self.kstar
-        return 0.5 * (6 * k**2 - 6 * k * ks + ks**2)
-
-    def __repr__(self):
-        return f"DoubleWell(kstar={self.kstar:g})"
 
 
 class FacetingSystem(CurveDAE):
@@ -43,7 +34,7 @@ class FacetingSystem(CurveDAE):
     def __init__(self, model, x, y):
         super().__init__(x, y)
         self.model = model
-        self.well = model.well if model.well is not None else _QuarticWell(model.kstar)
+        self.well = _as_well(model.well, model.kstar)
         x, y, L = equalize_chords(x, y)
         kappa = self.geometric_curvature(x, y, L)
         mu = -(model.alpha**2) * self._d2(kappa) / L**2 + self.well.dW(kappa)
@@ -160,14 +151,15 @@ class FacetingFlow(FlowModel):
     alpha : float
         Front width, ``alpha > 0``.
     kstar : float
-        Second well of the default double well ``W = k^2 (k - kstar)^2 / 4``.
+        Second well of the default :class:`qsa.energies.DoubleWell`
+        ``W = k^2 (k - kstar)^2 / 4``, ``kstar > 0``.
     beta : float
         Length-penalty strength, ``beta >= 0``.
     L_star : float
         Preferred length, ``L_star > 0``.
     well : object, optional
-        A well with callables ``W(k)``, ``dW(k)``, ``d2W(k)`` (vectorised);
-        default the quartic double well.
+        A well with callables ``W(k)``, ``dW(k)``, ``d2W(k)`` (vectorised), e.g.
+        :class:`qsa.energies.Well`; default ``DoubleWell(kstar)``.
     """
 
     alpha: float
@@ -179,13 +171,10 @@ class FacetingFlow(FlowModel):
 
     def __post_init__(self):
         object.__setattr__(self, "alpha", _number(self.alpha, "alpha", positive=True))
-        object.__setattr__(self, "kstar", _number(self.kstar, "kstar"))
+        object.__setattr__(self, "kstar", _number(self.kstar, "kstar", positive=True))
         object.__setattr__(self, "beta", _number(self.beta, "beta", nonnegative=True))
         object.__setattr__(self, "L_star", _number(self.L_star, "L_star", positive=True))
-        if self.well is not None:
-            for attr in ("W", "dW", "d2W"):
-                if not callable(getattr(self.well, attr, None)):
-                    raise ValueError(f"well must provide a callable {attr}(k)")
+        _as_well(self.well, self.kstar)  # raises ValueError for an incomplete well
 
     def check_resolution(self, x, y):
         """Raise ``ValueError`` for NaN, too few nodes or a clockwise curve."""
