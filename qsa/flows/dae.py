@@ -27,6 +27,19 @@ rotated by ``-pi/2``, i.e. along the OUTWARD normal):
 Signs follow MATH.md section 3: ``V`` is the OUTWARD normal velocity and a
 counter-clockwise circle of radius R has ``kappa = +1/R``.
 
+Beyond the :class:`~qsa.flows.base.DAESystem` contract the systems offer
+``unpack(y)`` (named blocks), ``curvature(y)``, ``dissipation(y)``
+(``sum V^2 L/N``, the discrete ``int (V^n)^2 dsigma``), ``differential_rows``
+(the rows containing ``ydot``), ``time_derivative(y)`` (the consistent ``ydot``
+at a state on the constraint manifold) and, for CHA, ``adhesion_fields(y)``
+and ``L0``. The implementation lives in :mod:`qsa.flows.models`.
+
+Discrete energy and dissipation: with node weights ``w = L/N`` the energy is
+``E = sum_j w e_j + penalty``; along the semi-discrete flow
+``dE/dt = -sum_j V_j^2 w (1 + O(h^2))`` (tested). It is not an exact discrete
+gradient flow: on under-resolved curves (e.g. the appendix example at N = 50
+near t = 0.2) the energy can rise by O(h^2) amounts.
+
 Notes
 -----
 NOTE: the appendix writes the normal motion with the tangent rotated by
