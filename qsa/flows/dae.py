@@ -29,7 +29,10 @@ counter-clockwise circle of radius R has ``kappa = +1/R``.
 
 Beyond the :class:`~qsa.flows.base.DAESystem` contract the systems offer
 ``unpack(y)`` (named blocks), ``curvature(y)``, ``dissipation(y)``
-(``sum V^2 L/N``, the discrete ``int (V^n)^2 dsigma``), ``differential_rows``
+(``sum V^2 L/N``, the discrete ``int (V^n)^2 dsigma``),
+``bound_constants()`` (``{"L0": ...}`` for CHA; ``model.setup(x, y,
+**sys.bound_constants())`` rebuilds the same system, e.g. on resume),
+``differential_rows``
 (the rows containing ``ydot``), ``time_derivative(y)`` (the consistent ``ydot``
 at a state on the constraint manifold) and, for CHA, ``adhesion_fields(y)``
 and ``L0``. The implementation lives in :mod:`qsa.flows.models`.
@@ -57,6 +60,8 @@ from qsa.flows.models import (
     FacetingFlow,
     FacetingSystem,
     equalize_chords,
+    self_intersections,
 )
 
-__all__ = ["CHA", "FacetingFlow", "CurveDAE", "CHASystem", "FacetingSystem", "equalize_chords"]
+__all__ = ["CHA", "FacetingFlow", "CurveDAE", "CHASystem", "FacetingSystem", "equalize_chords",
+           "self_intersections"]

@@ -434,3 +434,43 @@ def test_default_well_is_the_double_well_and_user_wells_are_used():
     s3 = FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0,
                       well=Well(W=w.W, dW=w.dW, d2W=w.d2W)).setup(x, y)
     assert not np.allclose(s3.normal_velocity(s3.y0), s1.normal_velocity(s1.y0))
+
+
+# ------------------------------------------------------ resume & simplicity
+def test_bound_constants_rebuild_the_same_system_from_a_later_state():
+    model = CHA(**PAPER_CHA)
+    sys = model.setup(*paper_curve(64))
+    y, _ = backward_euler(sys, sys.y0, 1e-3)
+    again = model.setup(*sys.positions(y), **sys.bound_constants())
+    assert again.L0 == sys.L0 and sys.bound_constants() == {"L0": sys.L0}
+    yd = np.random.default_rng(0).standard_normal(sys.size)
+    assert np.array_equal(again.residual(y, yd), sys.residual(y, yd))
+    assert again.energy(y) == sys.energy(y)
+    fac = MODELS["facet"]
+    fsys = fac.setup(*smooth_curve(48))
+    assert fsys.bound_constants() == {}
+    with pytest.raises(ValueError, match="L0"):
+        model.setup(*paper_curve(64), L0=-1.0)
+
+
+def test_self_intersecting_initial_data_is_rejected():
+    from qsa.flows.dae import self_intersections
+
+    th = 2 * np.pi * np.arange(400) / 400
+    # a limacon with an inner loop: positive signed area but not simple
+    r = 0.5 + np.cos(th)
+    x, y = r * np.cos(th), r * np.sin(th)
+    assert self_intersections(x, y).shape[0] >= 1
+    with pytest.raises(ValueError, match="intersects itself"):
+        MODELS["ch-no-adhesion"].check_resolution(x, y)
+    # near contact without crossing: two sheets a fraction of a chord apart
+    xs, ys = paper_curve(200)
+    assert self_intersections(xs, ys).shape == (0, 2)
+    s = np.linspace(0, 1, 100, endpoint=False)
+    bottom = np.column_stack([s, np.zeros_like(s)])
+    top = np.column_stack([1 - s, np.full_like(s, 0.004)])  # closer than a chord (0.01)
+    pts = np.vstack([bottom, top])
+    assert self_intersections(pts[:, 0], pts[:, 1]).shape == (0, 2)
+    top[50, 1] = -0.001  # one node pushed through the other sheet
+    pts = np.vstack([bottom, top])
+    assert self_intersections(pts[:, 0], pts[:, 1]).shape[0] == 2

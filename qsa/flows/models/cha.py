@@ -29,7 +29,7 @@ class CHASystem(CurveDAE):
 
     fields = ("x", "y", "kappa", "kss", "V")
 
-    def __init__(self, model, x, y, *, adhesion_method="neighbours"):
+    def __init__(self, model, x, y, *, adhesion_method="neighbours", L0=None):
         super().__init__(x, y)
         self.model = model
         self.kernel = model.kernel
@@ -38,7 +38,8 @@ class CHASystem(CurveDAE):
                        if self.kernel is not None and adhesion_method == "neighbours" else None)
         self.adhesion_method = adhesion_method
         x, y, L = equalize_chords(x, y)
-        self.L0 = L
+        #: reference length of the penalty ``beta/2 (L - rho L0)^2``
+        self.L0 = L if L0 is None else _number(L0, "L0", positive=True)
         kappa = self.geometric_curvature(x, y, L)
         kss = self._d2(kappa) / L**2
         y0 = np.concatenate([x, y, kappa, kss, np.zeros(self.N), [L]])
@@ -144,6 +145,9 @@ class CHASystem(CurveDAE):
     def normal_velocity(self, y):
         return self.unpack(y)["V"].copy()
 
+    def bound_constants(self):
+        return {"L0": float(self.L0)}
+
     def metadata(self):
         m = self.model
         return {
@@ -236,8 +240,18 @@ class CHA(FlowModel):
                     f"N >= {math.ceil(L / self.l_star)}"
                 )
 
-    def setup(self, x, y):
-        """Bind to initial positions (projected to equal chords); ``L0`` = their length."""
+    def setup(self, x, y, *, L0=None):
+        """Bind to initial positions (projected to equal chords).
+
+        Parameters
+        ----------
+        x, y : array_like, shape (N,)
+            Counter-clockwise nodes with (nearly) equal chords.
+        L0 : float, optional
+            Reference length of the penalty; default the length of ``x, y``
+            (the paper's ``|Gamma_0|``). Pass the original ``L0`` when resuming
+            from a later state (see ``CHASystem.bound_constants``).
+        """
         self.check_resolution(x, y)
         return CHASystem(self, np.asarray(x, float), np.asarray(y, float),
-                         adhesion_method=self.adhesion_method)
+                         adhesion_method=self.adhesion_method, L0=L0)
