@@ -57,6 +57,7 @@ __all__ = [
     "adhesion_pairs",
     "adhesion_energy",
     "adhesion_fields",
+    "uniform_weight_fields",
     "PairDerivatives",
     "adhesion_pair_derivatives",
     "adhesion_field_jacobians",
@@ -354,23 +355,35 @@ def adhesion_fields(kernel, x, y, w, *, pairs=None, method="neighbours"):
     N = x.size
     w = _weights(w, N)
     i, j = _resolve_pairs(kernel, x, y, pairs, method)
+    if np.all(w == w[0]):  # uniform weights (scaled arc length): fewer gathers
+        return uniform_weight_fields(kernel, x, y, w[0], i, j)
     dx = x[i] - x[j]
     dy = y[i] - y[j]
-    l = dx * dx + dy * dy
-    Av, dAv = kernel.derivatives(l, order=1)
+    Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
     B = 2.0 * kernel.A0 * w
-    if np.all(w == w[0]):  # uniform weights (scaled arc length): fewer gathers
-        w0 = w[0]
-        B = B + 2.0 * w0 * (np.bincount(i, Av, N) + np.bincount(j, Av, N))
-        gx = dAv * dx
-        gy = dAv * dy
-        fx = 4.0 * w0 * (np.bincount(i, gx, N) - np.bincount(j, gx, N))
-        fy = 4.0 * w0 * (np.bincount(i, gy, N) - np.bincount(j, gy, N))
-        return B, np.column_stack([fx, fy])
     B = B + 2.0 * (np.bincount(i, Av * w[j], N) + np.bincount(j, Av * w[i], N))
     fx = 4.0 * (np.bincount(i, dAv * dx * w[j], N) - np.bincount(j, dAv * dx * w[i], N))
     fy = 4.0 * (np.bincount(i, dAv * dy * w[j], N) - np.bincount(j, dAv * dy * w[i], N))
     return B, np.column_stack([fx, fy])
+
+
+def uniform_weight_fields(kernel, x, y, w, i, j):
+    """``(B, force)`` of :func:`adhesion_fields` for one scalar weight ``w`` (no input checks).
+
+    The inner loop of the flow models: ``x, y`` must be finite float arrays of
+    shape (N,) and ``(i, j)`` a pair list with ``i < j``.
+    """
+    N = x.size
+    dx = x[i] - x[j]
+    dy = y[i] - y[j]
+    Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
+    B = 2.0 * w * (kernel.A0 + np.bincount(i, Av, N) + np.bincount(j, Av, N))
+    gx = dAv * dx
+    gy = dAv * dy
+    force = np.empty((N, 2))
+    force[:, 0] = 4.0 * w * (np.bincount(i, gx, N) - np.bincount(j, gx, N))
+    force[:, 1] = 4.0 * w * (np.bincount(i, gy, N) - np.bincount(j, gy, N))
+    return B, force
 
 
 class PairDerivatives(NamedTuple):

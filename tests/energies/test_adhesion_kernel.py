@@ -264,3 +264,16 @@ def test_pair_list_paths_agree(cutoff):
     di, dj = dense_pairs(300)
     keep = np.hypot(x[di] - x[dj], y[di] - y[dj]) <= cutoff
     assert np.array_equal(i, di[keep]) and np.array_equal(j, dj[keep])
+
+
+def test_uniform_and_general_weight_paths_agree():
+    from qsa.energies.adhesion import uniform_weight_fields
+
+    x, y = wobbly_curve(120, seed=3)
+    i, j = dense_pairs(120)
+    B1, F1 = uniform_weight_fields(PAPER_CHA, x, y, 0.07, i, j)
+    w = np.full(120, 0.07)
+    w[0] *= 1 + 1e-15  # forces the general path
+    B2, F2 = adhesion_fields(PAPER_CHA, x, y, w, pairs=(i, j))
+    assert np.max(np.abs(B1 - B2)) <= 1e-12 * np.max(np.abs(B1))
+    assert np.max(np.abs(F1 - F2)) <= 1e-12 * np.max(np.abs(F1))

@@ -474,3 +474,11 @@ def test_self_intersecting_initial_data_is_rejected():
     top[50, 1] = -0.001  # one node pushed through the other sheet
     pts = np.vstack([bottom, top])
     assert self_intersections(pts[:, 0], pts[:, 1]).shape[0] == 2
+
+
+@pytest.mark.parametrize("name", ["cha-neighbours", "cha-dense", "facet"])
+def test_diverged_iterate_gives_nonfinite_residual_not_exception(name):
+    sys = MODELS[name].setup(*paper_curve(32) if "cha" in name else smooth_curve(32))
+    y = sys.y0.copy()
+    y[3] = np.nan
+    assert not np.all(np.isfinite(sys.residual(y, np.zeros(sys.size))))

@@ -13,10 +13,10 @@ import numpy as np
 from qsa.energies.adhesion import (
     AdhesionKernel,
     adhesion_energy,
-    adhesion_fields,
     adhesion_pair_derivatives,
     dense_pairs,
     pair_list,
+    uniform_weight_fields,
 )
 from qsa.flows.base import FlowModel
 from qsa.flows.models.curve_dae import CurveDAE, _check_xy, _number, equalize_chords
@@ -51,11 +51,15 @@ class CHASystem(CurveDAE):
         """Pairs, ``B`` and the force at weights ``w = L/N`` (or zeros without adhesion)."""
         if self.kernel is None:
             return None, np.zeros(self.N), np.zeros((self.N, 2))
+        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(Y)) and np.isfinite(L)):
+            # a diverged Newton iterate: a non-finite residual, not an exception
+            nan = np.full(self.N, np.nan)
+            return None, nan, np.column_stack([nan, nan])
         if self.cutoff is None:
             pairs = dense_pairs(self.N)
         else:
             pairs = pair_list(X, Y, self.cutoff)
-        B, force = adhesion_fields(self.kernel, X, Y, L / self.N, pairs=pairs)
+        B, force = uniform_weight_fields(self.kernel, X, Y, L / self.N, *pairs)
         return pairs, B, force
 
     def adhesion_fields(self, y):
