@@ -482,3 +482,16 @@ def test_diverged_iterate_gives_nonfinite_residual_not_exception(name):
     y = sys.y0.copy()
     y[3] = np.nan
     assert not np.all(np.isfinite(sys.residual(y, np.zeros(sys.size))))
+
+
+def test_overflowing_iterate_gives_nonfinite_residual_without_warnings():
+    sys = MODELS["facet"].setup(*smooth_curve(32))
+    y = sys.y0.copy()
+    y[sys.iL] = 1e200  # L**3 overflows
+    F = sys.residual(y, np.zeros(sys.size))  # pytest turns qsa RuntimeWarnings into errors
+    assert not np.all(np.isfinite(F))
+    y = sys.y0.copy()
+    y[2 * sys.N] = 1e200  # kappa^2 overflows
+    assert not np.all(np.isfinite(sys.residual(y, np.zeros(sys.size))))
+    J = sys.jacobian(y, np.zeros(sys.size), 1.0)
+    assert not np.all(np.isfinite(J.data))

@@ -254,12 +254,12 @@ class CurveDAE(DAESystem):
 
     # ------------------------------------------------------------ access
     def unpack(self, y):
-        """Named views of the blocks of ``y`` (and ``L`` as a float)."""
+        """Named views of the blocks of ``y`` (and ``L`` as a NumPy scalar)."""
         y = np.asarray(y, dtype=float)
         if y.shape != (self.size,):
             raise ValueError(f"y has shape {y.shape}, expected ({self.size},)")
         out = {name: y[k * self.N : (k + 1) * self.N] for k, name in enumerate(self.fields)}
-        out["L"] = float(y[self.iL])
+        out["L"] = y[self.iL]  # NumPy scalar: overflow gives inf, not OverflowError
         return out
 
     def positions(self, y):
@@ -335,6 +335,16 @@ class CurveDAE(DAESystem):
         return (tx * d2y - ty * d2x) / L**3
 
     def residual(self, y, ydot):
+        """``F(y, ydot)``, shape (size,); non-finite for a diverged (overflowing) iterate."""
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return self._residual(y, ydot)
+
+    def jacobian(self, y, ydot, c):
+        """Sparse (CSC) ``dF/dy + c dF/dydot``, shape (size, size); canonical format."""
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return self._jacobian(y, ydot, c)
+
+    def _residual(self, y, ydot):
         y = np.asarray(y, dtype=float)
         ydot = np.asarray(ydot, dtype=float)
         N, h = self.N, self.h
@@ -354,7 +364,7 @@ class CurveDAE(DAESystem):
         F[-1] = h * np.sum(Xd * tx + Yd * ty)
         return F
 
-    def jacobian(self, y, ydot, c):
+    def _jacobian(self, y, ydot, c):
         y = np.asarray(y, dtype=float)
         ydot = np.asarray(ydot, dtype=float)
         c = float(c)
