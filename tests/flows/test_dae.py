@@ -249,12 +249,17 @@ def test_wrong_sign_would_be_caught():
 
 # ----------------------------------------------------------- backward Euler
 def backward_euler(sys, y, k, tol=1e-10, maxiter=20):
-    """One implicit Euler step by Newton with sparse LU; returns (y_new, iterations)."""
+    """One implicit Euler step by Newton with sparse LU; returns (y_new, iterations).
+
+    The LU is refreshed on iterations 1, 4, 7, ... (a mildly simplified Newton).
+    """
     yn = y
     y = y.copy()
     for it in range(1, maxiter + 1):
         ydot = (y - yn) / k
-        dy = splu(sys.jacobian(y, ydot, 1.0 / k)).solve(sys.residual(y, ydot))
+        if it % 3 == 1:
+            lu = splu(sys.jacobian(y, ydot, 1.0 / k))
+        dy = lu.solve(sys.residual(y, ydot))
         y = y - dy
         if np.max(np.abs(dy[sys.error_index])) < tol:
             return y, it
@@ -335,9 +340,9 @@ def test_resolution_check_uses_node_spacing():
 def test_neighbour_list_model_matches_dense_model_table_T1_kernel():
     # Table T1 kernel (l* = 0.01) on a 13-fold crenellated start: residual and Newton
     # matrix from the cutoff neighbour list agree with the all-pairs path to 1e-12.
-    N = 1300
+    N = 900
     th = 2 * np.pi * np.arange(4000) / 4000
-    r = 1 + 0.12 * np.tanh(4 * np.cos(13 * th))
+    r = 0.7 * (1 + 0.12 * np.tanh(4 * np.cos(13 * th)))
     # equal arc length, then setup's projection to equal chords (chord spread ~1e-4 here)
     x, y, _ = resample_closed(r * np.cos(th), r * np.sin(th), N)
     params = dict(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=0.01, a=1.0)
