@@ -57,6 +57,7 @@ __all__ = [
     "adhesion_pairs",
     "adhesion_energy",
     "adhesion_fields",
+    "adhesion_normal_velocity",
     "uniform_weight_fields",
     "PairDerivatives",
     "adhesion_pair_derivatives",
@@ -384,6 +385,37 @@ def uniform_weight_fields(kernel, x, y, w, i, j):
     force[:, 0] = 4.0 * w * (np.bincount(i, gx, N) - np.bincount(j, gx, N))
     force[:, 1] = 4.0 * w * (np.bincount(i, gy, N) - np.bincount(j, gy, N))
     return B, force
+
+
+def adhesion_normal_velocity(kernel, x, y, nx, ny, kappa, w, *, pairs=None,
+                             method="neighbours"):
+    """Two-point normal velocity ``V^n_A = -(force . n + kappa B)`` (e:Adh-NV).
+
+    ``(force . n + kappa B, 0)`` is the extrinsic L^2(dsigma) gradient
+    (e:Adh-Ex_grad); rigid invariance makes it orthogonal to the rigid normal
+    velocities ``e_k . n`` and ``gamma . tau`` in ``<f, h> = int f h dsigma``
+    (MATH.md section 6).
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : array_like, shape (N,)
+        Node positions.
+    nx, ny : array_like, shape (N,)
+        Outward unit normal at the nodes.
+    kappa : array_like, shape (N,)
+        Curvature (``+1/R`` on a counter-clockwise circle).
+    w : float or array_like, shape (N,)
+        Node weights of dsigma (``g_j / N``).
+    pairs, method
+        As in :func:`adhesion_energy`.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
+    B, F = adhesion_fields(kernel, x, y, w, pairs=pairs, method=method)
+    return -(F[:, 0] * np.asarray(nx) + F[:, 1] * np.asarray(ny) + np.asarray(kappa) * B)
 
 
 class PairDerivatives(NamedTuple):

@@ -277,3 +277,30 @@ def test_uniform_and_general_weight_paths_agree():
     B2, F2 = adhesion_fields(PAPER_CHA, x, y, w, pairs=(i, j))
     assert np.max(np.abs(B1 - B2)) <= 1e-12 * np.max(np.abs(B1))
     assert np.max(np.abs(F1 - F2)) <= 1e-12 * np.max(np.abs(F1))
+
+
+@pytest.mark.parametrize("kernel", [PAPER_CHA, AdhesionKernel(A0=3.0, l_star=0.15, a=0.8)])
+def test_rigid_invariance_identities_on_a_closed_curve(kernel):
+    # MATH.md section 6: int (force.n + kappa B)(v0.n) dsigma = 0 and
+    # int (force.n + kappa B)(gamma.tau) dsigma = 0, on a smooth non-symmetric closed
+    # curve with exact normals/curvature and spectrally accurate trapezoid weights.
+    from qsa.energies.adhesion import adhesion_normal_velocity
+
+    N = 600
+    t = 2 * np.pi * np.arange(N) / N
+    r = 1 + 0.2 * np.cos(3 * t) + 0.1 * np.sin(2 * t + 0.3)
+    rp = -0.6 * np.sin(3 * t) + 0.2 * np.cos(2 * t + 0.3)
+    rpp = -1.8 * np.cos(3 * t) - 0.4 * np.sin(2 * t + 0.3)
+    x, y = r * np.cos(t), r * np.sin(t)
+    xp, yp = rp * np.cos(t) - r * np.sin(t), rp * np.sin(t) + r * np.cos(t)
+    speed = np.hypot(xp, yp)
+    kappa = (r**2 + 2 * rp**2 - r * rpp) / speed**3
+    tx, ty = xp / speed, yp / speed
+    nx, ny = ty, -tx
+    w = speed * 2 * np.pi / N  # dsigma weights (parameter t in [0, 2 pi))
+    V = adhesion_normal_velocity(kernel, x, y, nx, ny, kappa, w, method="dense")
+    scale = np.sum(np.abs(V) * w)
+    for f in (nx, ny, x * tx + y * ty):
+        assert abs(np.sum(V * f * w)) <= 1e-10 * scale
+    # and it is not trivially small
+    assert scale > 1e-3 * kernel.A0
