@@ -66,6 +66,9 @@ def run(title, Ns, make_model, repeats, target=None):
     if target is not None:
         verdict = f"  (target <= {target:.2f}: {'ok' if p <= target else 'MISSED'})"
     print(f"fitted exponent p = {p:.3f}{verdict}")
+    if len(Ns) >= 5:  # small N is dominated by fixed per-call overhead
+        q = np.polyfit(np.log(Ns[-3:]), np.log(times[-3:]), 1)[0]
+        print(f"exponent over the three largest N: {q:.3f}")
     return p
 
 
