@@ -500,3 +500,39 @@ def test_overflowing_iterate_gives_nonfinite_residual_without_warnings():
     assert not np.all(np.isfinite(sys.residual(y, np.zeros(sys.size))))
     J = sys.jacobian(y, np.zeros(sys.size), 1.0)
     assert not np.all(np.isfinite(J.data))
+
+
+# --------------------------------------------------- local/nonlocal splitting
+@pytest.mark.parametrize("name", ["cha-neighbours", "cha-dense", "facet"])
+def test_jacobian_parts_sum_to_the_jacobian(name):
+    sys = MODELS[name].setup(*paper_curve(60))
+    rng = np.random.default_rng(1)
+    yy = sys.y0 + 0.01 * rng.standard_normal(sys.size)
+    yd = rng.standard_normal(sys.size)
+    J = sys.jacobian(yy, yd, 7.0)
+    for _ in range(2):  # second call: cached patterns
+        Jl, Jn = sys.jacobian_parts(yy, yd, 7.0)
+        assert abs(Jl + Jn - J).max() <= 1e-14 * abs(J).max()
+        assert Jl.nnz < 60 * sys.N
+    if name == "facet":
+        assert Jn.nnz == 0
+    else:
+        assert Jn.nnz > 10 * sys.N  # the long-range kernel couples far nodes
+
+
+def test_local_part_preconditions_gmres_for_the_long_range_kernel():
+    import scipy.sparse.linalg as spla
+
+    sys = CHA(**PAPER_CHA).setup(*paper_curve(200))
+    k = 1e-3
+    J = sys.jacobian(sys.y0, np.zeros(sys.size), 1 / k)
+    Jl, _ = sys.jacobian_parts(sys.y0, np.zeros(sys.size), 1 / k)
+    b = np.random.default_rng(0).standard_normal(sys.size)
+    x_direct = splu(J).solve(b)
+    lu = splu(Jl)
+    M = spla.LinearOperator(J.shape, lu.solve)
+    its = []
+    x, info = spla.gmres(J, b, M=M, rtol=1e-12, restart=60, maxiter=5,
+                         callback=lambda r: its.append(r), callback_type="pr_norm")
+    assert info == 0 and len(its) <= 25
+    assert np.max(np.abs(x - x_direct)) <= 1e-9 * np.max(np.abs(x_direct))

@@ -84,7 +84,7 @@ class CHASystem(CurveDAE):
         F[N:] = u["V"] - self._velocity(y, tx, ty)
         return F
 
-    def _model_jacobian(self, T, y, tx, ty):
+    def _model_jacobian(self, T, y, tx, ty, TN=None):
         m, N, h = self.model, self.N, self.h
         j, jp, jm = self._j, self._jp, self._jm
         u = self.unpack(y)
@@ -120,12 +120,24 @@ class CHASystem(CurveDAE):
             t = adhesion_pair_derivatives(self.kernel, X, Y, pairs=pairs)
             c4 = -4.0 * L / N
             i, k = t.i, t.j
-            kd = kappa[i] * t.dA
-            T.add(4 * N + i, k, c4 * (kd * t.dx + nx[i] * t.hxx + ny[i] * t.hxy))
-            T.add(4 * N + i, N + k, c4 * (kd * t.dy + nx[i] * t.hxy + ny[i] * t.hyy))
-            kd = kappa[k] * t.dA
-            T.add(4 * N + k, i, c4 * (-kd * t.dx + nx[k] * t.hxx + ny[k] * t.hxy))
-            T.add(4 * N + k, N + i, c4 * (-kd * t.dy + nx[k] * t.hxy + ny[k] * t.hyy))
+            vals = (
+                c4 * (kappa[i] * t.dA * t.dx + nx[i] * t.hxx + ny[i] * t.hxy),
+                c4 * (kappa[i] * t.dA * t.dy + nx[i] * t.hxy + ny[i] * t.hyy),
+                c4 * (-kappa[k] * t.dA * t.dx + nx[k] * t.hxx + ny[k] * t.hxy),
+                c4 * (-kappa[k] * t.dA * t.dy + nx[k] * t.hxy + ny[k] * t.hyy),
+            )
+            if TN is None:
+                parts = [(T, slice(None))]
+            else:  # index neighbours (|i - k| = 1 mod N) stay with the local stencil
+                gap = k - i
+                near = (gap == 1) | (gap == N - 1)
+                parts = [(T, near), (TN, ~near)]
+            for Tp, sel in parts:
+                ii, kk = i[sel], k[sel]
+                Tp.add(4 * N + ii, kk, vals[0][sel])
+                Tp.add(4 * N + ii, N + kk, vals[1][sel])
+                Tp.add(4 * N + kk, ii, vals[2][sel])
+                Tp.add(4 * N + kk, N + ii, vals[3][sel])
             # diagonal: kappa_p force_p + n_p^T (4 w sum_q H_pq)
             Sxx = np.bincount(i, t.hxx, N) + np.bincount(k, t.hxx, N)
             Sxy = np.bincount(i, t.hxy, N) + np.bincount(k, t.hxy, N)

@@ -72,7 +72,7 @@ class FacetingSystem(CurveDAE):
         F[2 * N :] = u["V"] - self._velocity(y)
         return F
 
-    def _model_jacobian(self, T, y, tx, ty):
+    def _model_jacobian(self, T, y, tx, ty, TN=None):
         m, N, h = self.model, self.N, self.h
         j, jp, jm = self._j, self._jp, self._jm
         u = self.unpack(y)
