@@ -16,7 +16,7 @@ import sys
 from qsa._version import __version__
 
 #: Subcommand modules under ``qsa.commands``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["demo"]
+SUBCOMMANDS = ["demo", "equilibrium"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,402 @@
+"""Periodic orbits of the faceting equilibrium equation (phase-plane construction).
+
+Equilibria with constant arc length solve (e:Facet-CP, ``' = d/dsigma``)
+
+    alpha^2 psi'' - W'(psi) = nu1,
+
+whose first integral (e:Fint) is ``alpha^2 psi'^2 / 2 = P(psi) := W(psi) + nu1 psi + nu2``.
+Since ``alpha^2 psi'' = P'(psi)``, periodic orbits circle a local *maximum* ``c`` of
+``P`` (a point of the spinodal region ``W''(c) < 0``) and oscillate between the two
+roots ``a < c < b`` of ``P``; they exist for ``nu2_c < nu2 < nu2_sep`` with
+``nu2_c = -(W(c) + nu1 c)`` (the centre, small oscillations) and
+``nu2_sep = -max(W(s) + nu1 s)`` over the two neighbouring minima ``s`` of ``P``
+(the separatrix, infinitely long plateaus). For ``nu1 = 0`` and the quartic well,
+``-kstar^4/64 < nu2 < 0`` (MATH.md section 5); ``nu2 -> 0`` is the separatrix.
+
+Period and curvature per pulse
+------------------------------
+With ``psi = m + h tanh v`` (``m = (a+b)/2``, ``h = (b-a)/2``; i.e. ``psi = m + h sin u``
+with ``u = gd(v)``, MATH.md section 5) the turning-point singularities disappear:
+``P = (psi - a)(b - psi) R(psi)`` with ``R > 0`` on ``[a, b]`` and
+
+    dsigma/dv = alpha sech(v) / sqrt(2 R),
+
+a smooth, bounded function of ``v`` that decays like ``exp(-|v|)`` once ``psi`` is
+closer to a turning point than to the nearest other root of ``P``. Near the
+separatrix it equals ``sqrt(2) alpha / h`` over a long stretch -- exactly the
+heteroclinic, whose logistic variable ``v`` is. Half a period is
+``T/2 = int dsigma/dv dv`` and the curvature per pulse (the turning of the
+tangent) ``Theta = int_period psi dsigma = 2 int psi dsigma/dv dv``, both with
+composite Gauss-Legendre panels of width 1 in ``v``. ``R`` is evaluated without
+cancellation: for the quartic with ``nu1 = 0`` from the exact roots
+(``R = (d + x_a)(d + x_b)/4``, ``x_a = psi - a``, ``x_b = b - psi``, ``d`` the gap to the
+outer roots), otherwise from ``P(psi) = x_a * mean(P')`` on ``[a, psi]`` (or its
+mirror at ``b``), which stays accurate at the turning points. The orbit is sampled
+by inverting ``sigma(v)`` with safeguarded Newton steps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.special import expit
+
+from qsa.equilibria._wells import _positive, is_quartic, resolve_well
+
+__all__ = ["PeriodicOrbit", "periodic_orbit", "periodic_range"]
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
+_MEAN_X, _MEAN_W = np.polynomial.legendre.leggauss(16)
+_MEAN_X = 0.5 * (_MEAN_X + 1)
+_MEAN_W = 0.5 * _MEAN_W
+_TAIL = 38.0  # exp(-38) ~ 3e-17: the part of sigma(v) beyond the panels is negligible
+
+
+# ---------------------------------------------------------------- phase plane
+@dataclass(frozen=True)
+class _Family:
+    """Critical points of ``P`` for one ``nu1``: centre ``c``, minima ``s_lo < c < s_hi``."""
+
+    well: object
+    kstar: float
+    nu1: float
+    c: float
+    s_lo: float
+    s_hi: float
+    nu2_c: float
+    nu2_sep: float
+    closed: bool  # quartic well and nu1 == 0: exact roots
+
+    def P(self, psi, nu2):
+        return self.well.W(psi) + self.nu1 * psi + nu2
+
+    def dP(self, psi):
+        return self.well.dW(psi) + self.nu1
+
+
+def _family(well, kstar, nu1) -> _Family:
+    if is_quartic(well, kstar) and nu1 == 0.0:
+        k = kstar
+        return _Family(well, k, 0.0, 0.5 * k, 0.0, k, -(k**4) / 64, 0.0, True)
+    k = np.linspace(-1.0, 2.0, 3001) * kstar
+    dP = np.asarray(well.dW(k), dtype=float) + nu1
+    idx = np.nonzero(np.sign(dP[:-1]) * np.sign(dP[1:]) <= 0)[0]
+    crit = []
+    for i in idx:
+        if dP[i] == 0:
+            r = k[i]
+        elif dP[i + 1] == 0:
+            continue
+        else:
+            r = brentq(lambda x: float(well.dW(x)) + nu1, k[i], k[i + 1], xtol=1e-15, rtol=1e-15)
+        if not crit or abs(r - crit[-1]) > 1e-12 * kstar:
+            crit.append(r)
+    crit = np.array(crit)
+    best = None
+    for j in range(1, len(crit) - 1):
+        if float(well.d2W(crit[j])) < 0 and float(well.d2W(crit[j - 1])) > 0 \
+                and float(well.d2W(crit[j + 1])) > 0:
+            if best is None or abs(crit[j] - 0.5 * kstar) < abs(crit[best] - 0.5 * kstar):
+                best = j
+    if best is None:
+        raise ValueError(
+            f"nu1={nu1}: W'(psi) + nu1 has no maximum of P between two minima, so "
+            "alpha^2 psi'' - W'(psi) = nu1 has no periodic orbits (|nu1| too large)"
+        )
+    c, s_lo, s_hi = crit[best], crit[best - 1], crit[best + 1]
+    Pc = float(well.W(c)) + nu1 * c
+    Ps = max(float(well.W(s_lo)) + nu1 * s_lo, float(well.W(s_hi)) + nu1 * s_hi)
+    return _Family(well, kstar, float(nu1), c, s_lo, s_hi, -Pc, -Ps, False)
+
+
+# ---------------------------------------------------------------- the orbit
+@dataclass(frozen=True, eq=False)
+class PeriodicOrbit:
+    """One periodic solution ``psi(sigma)`` of ``alpha^2 psi'' - W'(psi) = nu1``.
+
+    Call it with arc length: ``orbit(sigma)``; ``psi(0) = a`` (a minimum of the
+    pulse, the middle of a flat facet) and ``psi(period/2) = b``.
+
+    Attributes
+    ----------
+    alpha, nu1, nu2, kstar : float
+    well : object
+    a, b : float
+        Turning points (roots of ``P``), ``a < b``.
+    period : float
+        Arc length of one pulse, ``T``.
+    turning : float
+        Curvature per pulse ``Theta = int_0^T psi dsigma`` (the angle by which the
+        tangent turns over one pulse).
+    depth : float
+        ``min(a - s_lo, s_hi - b)``: distance of the plateaus from the wells of P
+        (exponentially small near the separatrix).
+    """
+
+    alpha: float
+    nu1: float
+    nu2: float
+    kstar: float
+    well: object
+    a: float
+    b: float
+    period: float
+    turning: float
+    depth: float
+    _t: dict = field(repr=False, default=None)
+
+    # --------------------------------------------------------- evaluation
+    def _v_of_sigma(self, sig):
+        """Invert ``sigma(v)`` (sigma from the turning point a); sig in [0, T/2]."""
+        t = self._t
+        vb, S = t["vb"], t["S"]
+        sig = np.clip(sig, 0.0, S[-1])
+        j = np.clip(np.searchsorted(S, sig, side="right") - 1, 0, len(vb) - 2)
+        lo, hi = vb[j].copy(), vb[j + 1].copy()
+        frac = np.where(S[j + 1] > S[j], (sig - S[j]) / np.maximum(S[j + 1] - S[j], 1e-300), 0.5)
+        v = lo + frac * (hi - lo)
+        hw = 0.5 * (self.b - self.a) / max(abs(self.a), abs(self.b))
+        act = np.arange(v.size)
+        for _ in range(80):
+            jj, va = j[act], v[act]
+            half = 0.5 * (va - vb[jj])
+            nodes = vb[jj][:, None] + half[:, None] * (1 + _GL_X)
+            f = S[jj] + half * (t["F"](nodes) @ _GL_W) - sig[act]
+            lo[act] = np.where(f < 0, va, lo[act])
+            hi[act] = np.where(f > 0, va, hi[act])
+            new = va - f / t["F"](va)
+            bad = ~((new > lo[act]) & (new < hi[act])) | ~np.isfinite(new)
+            new = np.where(bad, 0.5 * (lo[act] + hi[act]), new)
+            # converged once the step no longer moves psi = m + h tanh(v)
+            step = np.abs(new - va)
+            done = (step <= 1e-15 * (1 + np.abs(va))) | (hw * step / np.cosh(va) ** 2 <= 1e-16)
+            v[act] = new
+            act = act[~done]
+            if act.size == 0:
+                break
+        return v
+
+    def _split(self, sigma):
+        sigma = np.asarray(sigma, dtype=float)
+        T = self.period
+        loc = np.mod(sigma, T)
+        rising = loc <= 0.5 * T
+        sig = np.where(rising, loc, T - loc)
+        return self._v_of_sigma(sig.ravel()).reshape(sig.shape), rising
+
+    def __call__(self, sigma):
+        """``psi(sigma)``, periodic with period ``T``; shape like ``sigma``."""
+        v, _ = self._split(sigma)
+        xa, xb = self._t["xaxb"](v)
+        return np.where(v <= 0, self.a + xa, self.b - xb)
+
+    def derivative(self, sigma):
+        """``psi'(sigma) = (dpsi/dv) / (dsigma/dv)``, from the quadrature; shape like sigma."""
+        v, rising = self._split(sigma)
+        h = 0.5 * (self.b - self.a)
+        slope = h / (np.cosh(v) ** 2 * self._t["F"](v))
+        return np.where(rising, slope, -slope)
+
+    @property
+    def range_info(self) -> str:
+        return f"nu2 in ({self._t['family'].nu2_c!r}, {self._t['family'].nu2_sep!r})"
+
+
+def _build(fam: _Family, alpha, nu2, *, rho=None) -> PeriodicOrbit:
+    """Orbit for ``nu2`` (or, on the exact quartic path, for ``rho = 2 sqrt(-nu2)``)."""
+    k = fam.kstar
+    if fam.closed:
+        if rho is None:
+            rho = 2.0 * np.sqrt(-nu2)
+        nu2 = -0.25 * rho**2
+        a = 2 * rho / (k + np.sqrt(k * k - 4 * rho))
+        b = k - a
+        d = a + 2 * rho / (k + np.sqrt(k * k + 4 * rho))  # a - r1 = r4 - b
+        h = 0.5 * np.sqrt(k * k - 4 * rho)
+        d_lo = d_hi = d
+        depth = a
+
+        def R(xa, xb, v):
+            return 0.25 * (d + xa) * (d + xb)
+    else:
+        opts = {"xtol": 1e-300, "rtol": 1e-15, "maxiter": 500}
+        a = brentq(lambda x: float(fam.P(x, nu2)), fam.s_lo, fam.c, **opts)
+        b = brentq(lambda x: float(fam.P(x, nu2)), fam.c, fam.s_hi, **opts)
+        h = 0.5 * (b - a)
+        d_lo = abs(float(fam.dP(a)) / float(fam.well.d2W(a)))
+        d_hi = abs(float(fam.dP(b)) / float(fam.well.d2W(b)))
+        depth = min(a - fam.s_lo, fam.s_hi - b)
+
+        def R(xa, xb, v):
+            low = v <= 0
+            x = np.where(low, xa, xb)
+            base = np.where(low, a, b)
+            sgn = np.where(low, 1.0, -1.0)
+            pts = base[..., None] + (sgn * x)[..., None] * _MEAN_X
+            mean = sgn * (fam.dP(pts) @ _MEAN_W)
+            return mean / np.where(low, xb, xa)
+
+    def xaxb(v):
+        return 2 * h * expit(2 * v), 2 * h * expit(-2 * v)
+
+    def F(v):
+        xa, xb = xaxb(v)
+        return alpha / (np.cosh(v) * np.sqrt(2 * R(xa, xb, v)))
+
+    X_lo = 0.5 * np.log(max(2 * h / max(d_lo, 1e-300), 1.0)) + _TAIL
+    X_hi = 0.5 * np.log(max(2 * h / max(d_hi, 1e-300), 1.0)) + _TAIL
+    n = int(np.ceil(X_lo + X_hi))
+    vb = np.linspace(-X_lo, X_hi, n + 1)
+    half = 0.5 * np.diff(vb)
+    nodes = vb[:-1, None] + half[:, None] * (1 + _GL_X)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Fn = F(nodes)
+    pieces = half * (Fn @ _GL_W)
+    xa, xb = xaxb(nodes)
+    psi = np.where(nodes <= 0, a + xa, b - xb)
+    theta_half = float(np.sum(half * ((psi * Fn) @ _GL_W)))
+    S = np.concatenate([[0.0], np.cumsum(pieces)])
+    if not (np.all(np.isfinite(S)) and np.all(pieces >= 0)):
+        raise ValueError(
+            f"nu2={nu2!r}: the orbit is too close to the separatrix to evaluate this well in "
+            "double precision (P has lost its sign structure near the turning points); "
+            "use a larger alpha, fewer pulses, or the quartic well (exact roots)"
+        )
+    t = {"vb": vb, "S": S, "F": F, "xaxb": xaxb, "family": fam}
+    return PeriodicOrbit(alpha, fam.nu1, float(nu2), k, fam.well, float(a), float(b),
+                         2 * float(S[-1]), 2 * theta_half, float(depth), t)
+
+
+# ---------------------------------------------------------------- public API
+def periodic_range(nu1=0.0, well=None, kstar=None):
+    """The open interval ``(nu2_c, nu2_sep)`` of ``nu2`` with periodic orbits.
+
+    Independent of ``alpha``. For the quartic well and ``nu1 = 0`` it is
+    ``(-kstar^4/64, 0)``.
+
+    Raises
+    ------
+    ValueError
+        If ``nu1`` is so large that ``P`` has no maximum between two minima.
+    """
+    well, kstar = resolve_well(well, kstar)
+    fam = _family(well, kstar, _finite(nu1, "nu1"))
+    return fam.nu2_c, fam.nu2_sep
+
+
+def _finite(x, name):
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a finite number, got {x!r}") from None
+    if not np.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {x!r}")
+    return x
+
+
+def periodic_orbit(alpha, nu2, nu1=0.0, well=None, kstar=None) -> PeriodicOrbit:
+    """The periodic orbit of ``alpha^2 psi'' - W'(psi) = nu1`` with first-integral level nu2.
+
+    Parameters
+    ----------
+    alpha : float
+        ``> 0``.
+    nu2 : float
+        Level of the first integral ``alpha^2 psi'^2/2 = W(psi) + nu1 psi + nu2``;
+        must lie in :func:`periodic_range` (open interval).
+    nu1 : float
+        Multiplier of the total-curvature constraint.
+    well, kstar
+        As in :func:`heteroclinic`.
+
+    Returns
+    -------
+    PeriodicOrbit
+
+    Raises
+    ------
+    ValueError
+        ``alpha <= 0`` or ``nu2`` outside the periodic range (the message gives it).
+
+    Examples
+    --------
+    >>> orb = periodic_orbit(0.1, nu2=-1.0, kstar=5.0)
+    >>> bool(orb.a < 2.5 < orb.b), round(orb.turning / orb.period, 12)  # mean = kstar/2
+    (True, 2.5)
+    """
+    alpha = _positive(alpha, "alpha")
+    well, kstar = resolve_well(well, kstar)
+    fam = _family(well, kstar, _finite(nu1, "nu1"))
+    nu2 = _finite(nu2, "nu2")
+    if not fam.nu2_c < nu2 < fam.nu2_sep:
+        raise ValueError(
+            f"nu2={nu2!r} is outside the periodic range ({fam.nu2_c!r}, {fam.nu2_sep!r}) "
+            f"for nu1={fam.nu1!r}: no periodic orbit (below: P < 0 everywhere near the "
+            "centre; above: orbits are unbounded or homoclinic)"
+        )
+    return _build(fam, alpha, nu2)
+
+
+def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
+    """The periodic orbit whose curvature per pulse ``int psi dsigma`` equals ``turning``.
+
+    Solves for ``nu2`` along the family, parametrised by ``t > 0`` with
+    ``nu2 = nu2_sep - (nu2_sep - nu2_c) exp(-t)`` (``rho = kstar^2/4 exp(-t)`` on the
+    exact quartic path), which makes the period grow linearly in ``t`` near the
+    separatrix.
+
+    Raises
+    ------
+    ValueError
+        When no orbit of the family turns by ``turning``; the message gives the
+        range of turnings found and, for ``nu1 = 0``, the existence condition.
+    """
+    alpha = _positive(alpha, "alpha")
+    well, kstar = resolve_well(well, kstar)
+    fam = _family(well, kstar, _finite(nu1, "nu1"))
+    target = float(turning)
+
+    if fam.closed:
+        def orbit(t):
+            return _build(fam, alpha, None, rho=0.25 * kstar**2 * np.exp(-t))
+        t_max = 650.0
+    else:
+        span = fam.nu2_sep - fam.nu2_c
+        floor = 64 * np.finfo(float).eps * max(abs(fam.nu2_sep), abs(fam.nu2_c))
+        t_max = min(650.0, np.log(span / floor)) if fam.nu2_sep != 0 else 650.0
+
+        def orbit(t):
+            return _build(fam, alpha, fam.nu2_sep - span * np.exp(-t))
+
+    def f(t):
+        return orbit(t).turning - target
+
+    c = fam.c
+    theta0 = 2 * np.pi * alpha * c / np.sqrt(-float(well.d2W(c)))
+    ts = [1e-6, 1e-3, 0.03, 0.1, 0.3, 1.0]
+    while ts[-1] < t_max:
+        ts.append(min(2 * ts[-1], t_max))
+    prev_t, prev_f, seen = None, None, []
+    for t in ts:
+        ft = f(t)
+        seen.append(ft + target)
+        if ft == 0:
+            return orbit(t)
+        if prev_f is not None and np.sign(ft) != np.sign(prev_f):
+            root = brentq(f, prev_t, t, xtol=1e-14, rtol=1e-15)
+            return orbit(root)
+        prev_t, prev_f = t, ft
+    lo, hi = min(seen), max(seen)
+    cond = ""
+    if fam.nu1 == 0.0:
+        cond = (
+            f" The small-oscillation limit turns by Theta_0 = 2 pi alpha c / sqrt(-W''(c)) = "
+            f"{theta0:.6g} (c = {c:.6g}); for an N-pulse, N Theta_0 < 2 pi is needed, i.e. "
+            "N alpha < 1 for the quartic well."
+        )
+    raise ValueError(
+        f"no periodic orbit turns by {target:.6g}: the family with alpha={alpha}, "
+        f"nu1={fam.nu1} turns by {lo:.6g} ... {hi:.6g} per pulse.{cond}"
+    )

@@ -1,0 +1,463 @@
+"""Heteroclinic splices: quasi-equilibria made of 2N fronts (rounded polygons).
+
+Section "Formal Equilibrium and Quasi-Steady Analysis" (e:psi_h and the 2N-front
+quasi-equilibrium ``psi_N``). With constant arc length ``g = L`` and arc length
+``sigma = L s``, corner ``i`` is the arc ``[p_{2i-1}, p_{2i}]`` between an up-front and a
+down-front; the curvature is
+
+    psi_N(sigma) = sum_i [ psi~(y_i + a_i) - psi~(y_i - a_i) ],
+
+with ``c_i, a_i`` the midpoint and half-length of corner ``i`` and ``y_i = sigma - c_i``
+wrapped to ``[-L/2, L/2)`` -- the periodic form of the paper's alternating sum
+``sum (-1)^{i+1} psi~(sigma - p_i)``. ``psi~`` is the front cut off at a FIXED arc
+length: ``psi~ = chi psi_h + (1 - chi) kstar H(sigma)`` with a C-infinity cutoff
+``chi = 1`` for ``|sigma| <= l1`` and ``0`` for ``|sigma| >= l2``; it is monotone and each
+corner turns by exactly ``kstar (p_{2i} - p_{2i-1})``.
+
+NOTE: the paper cuts off at ``|s| in [alpha l, 2 alpha l]``, which shrinks with alpha
+and leaves an alpha-independent error; with a fixed cutoff the residuals scale like
+``exp(-kstar d_min / (sqrt(2) alpha))``, d_min the smallest front spacing (MATH.md
+section 5), as long as ``l1 > d_min``.
+
+Constraints and free parameters: the total turning ``kstar sum (p_{2i} - p_{2i-1}) =
+2 pi`` (e:C2) and the closure ``int tau dsigma = 0`` (e:C1) are 3 equations for 2N
+positions; a common shift of all positions only moves the base point, so
+``2N - 4`` parameters are free. :func:`splice` moves the positions by minimum-norm
+Gauss-Newton steps until ``|C| <= tol`` and returns a basis of the free directions.
+Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term):
+
+    R_kappa = -alpha^2 psi_N'' + W'(psi_N),   R_g = -alpha^2/2 psi_N'^2 + W(psi_N).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import expit
+
+from qsa.discretize import Fourier
+from qsa.equilibria._wells import _positive, is_quartic, resolve_well
+from qsa.equilibria.heteroclinic import heteroclinic
+from qsa.equilibria.result import Equilibrium
+
+__all__ = ["splice", "splice_polygon", "SpliceProfile", "polygon_positions"]
+
+
+# ------------------------------------------------------------------ cutoff
+def _smoothstep(t):
+    """C-infinity step S(t) = 0 (t <= 0) ... 1 (t >= 1) and its first two derivatives."""
+    t = np.asarray(t, dtype=float)
+    inside = (t > 0) & (t < 1)
+    tt = np.where(inside, t, 0.5)
+    q = 1 / (1 - tt) - 1 / tt
+    S = expit(q)
+    dq = 1 / (1 - tt) ** 2 + 1 / tt**2
+    d2q = 2 / (1 - tt) ** 3 - 2 / tt**3
+    S1 = S * (1 - S) * dq
+    S2 = S * (1 - S) * (1 - 2 * S) * dq**2 + S * (1 - S) * d2q
+    S = np.where(inside, S, (t >= 1).astype(float))
+    return S, np.where(inside, S1, 0.0), np.where(inside, S2, 0.0)
+
+
+class SpliceProfile:
+    """``psi_N`` and its arc-length derivatives for given front positions.
+
+    Parameters
+    ----------
+    front : Heteroclinic
+    positions : ndarray, shape (2N,)
+        Arc-length positions ``p_1 < p_2 < ... < p_2N`` (up, down, up, down, ...).
+    length : float
+        Total length L.
+    cutoff : (float, float)
+        ``(l1, l2)``, fixed arc lengths of the cutoff, ``0 < l1 < l2``.
+    """
+
+    def __init__(self, front, positions, length, cutoff):
+        self.front = front
+        self.p = np.asarray(positions, dtype=float)
+        self.L = float(length)
+        self.l1, self.l2 = (float(v) for v in cutoff)
+        self.c = 0.5 * (self.p[0::2] + self.p[1::2])
+        self.a = 0.5 * (self.p[1::2] - self.p[0::2])
+
+    def cut_front(self, x):
+        """``psi~, psi~', psi~''`` at local coordinates x (any shape)."""
+        f = self.front
+        k = f.kstar
+        r = np.abs(x)
+        w = self.l2 - self.l1
+        S, S1, S2 = _smoothstep((self.l2 - r) / w)
+        chi, dchi, d2chi = S, -np.sign(x) * S1 / w, S2 / w**2
+        live = r < self.l2
+        xs = np.where(live, x, 0.0)
+        psi = f(xs)
+        gap = np.where(x > 0, -f.complement(xs), psi)  # psi_h - kstar H(x), no cancellation
+        dpsi = f.derivative(xs)
+        d2psi = f.well.dW(psi) / f.alpha**2
+        step = k * (x > 0)
+        v0 = np.where(live, step + chi * gap, step)
+        v1 = np.where(live, dchi * gap + chi * dpsi, 0.0)
+        v2 = np.where(live, d2chi * gap + 2 * dchi * dpsi + chi * d2psi, 0.0)
+        return v0, v1, v2
+
+    def local(self, sigma):
+        """Wrapped coordinates ``y_i = sigma - c_i`` in [-L/2, L/2), shape (..., N)."""
+        y = np.asarray(sigma, dtype=float)[..., None] - self.c
+        return (y + 0.5 * self.L) % self.L - 0.5 * self.L
+
+    def __call__(self, sigma, derivatives=False):
+        """``psi_N(sigma)`` (and ``psi_N', psi_N''`` when ``derivatives``)."""
+        y = self.local(sigma)
+        up = self.cut_front(y + self.a)
+        dn = self.cut_front(y - self.a)
+        out = [np.sum(u - d, axis=-1) for u, d in zip(up, dn, strict=True)]
+        return tuple(out) if derivatives else out[0]
+
+    def position_derivatives(self, sigma):
+        """``d psi_N / d p_j`` at sigma, shape (..., 2N)."""
+        y = self.local(sigma)
+        up = self.cut_front(y + self.a)[1]
+        dn = self.cut_front(y - self.a)[1]
+        out = np.empty(y.shape[:-1] + (2 * len(self.a),))
+        out[..., 0::2] = -up
+        out[..., 1::2] = dn
+        return out
+
+    def residuals(self, sigma):
+        """``(R_kappa, R_g)`` at sigma (the perimeter term balanced, ``L* = L``)."""
+        psi, d1, d2 = self(sigma, derivatives=True)
+        W = self.front.well
+        al = self.front.alpha
+        return -(al**2) * d2 + W.dW(psi), -0.5 * al**2 * d1**2 + W.W(psi)
+
+    def residual_kappa_mp(self, sigma, dps=50):
+        """``R_kappa`` at the points sigma in mpmath arithmetic (quartic well only).
+
+        The cancellation in ``-alpha^2 psi'' + W'(psi)`` limits double precision to
+        about 1e-13 of the largest term; at ``dps`` digits exponentially small residuals
+        are resolved. Returns a list of ``mpmath.mpf``.
+        """
+        import mpmath
+
+        f = self.front
+        if not is_quartic(f.well, f.kstar):
+            raise ValueError("residual_kappa_mp needs the quartic well")
+        with mpmath.workdps(dps):
+            k, al = mpmath.mpf(f.kstar), mpmath.mpf(f.alpha)
+            lam = k / (mpmath.sqrt(2) * al)
+            l1, l2, L = mpmath.mpf(self.l1), mpmath.mpf(self.l2), mpmath.mpf(self.L)
+
+            def dW(x):
+                return x * (x - k) * (2 * x - k) / 2
+
+            def step(t):
+                if t <= 0:
+                    return mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)
+                if t >= 1:
+                    return mpmath.mpf(1), mpmath.mpf(0), mpmath.mpf(0)
+                q = 1 / (1 - t) - 1 / t
+                S = 1 / (1 + mpmath.exp(-q))
+                dq = 1 / (1 - t) ** 2 + 1 / t**2
+                d2q = 2 / (1 - t) ** 3 - 2 / t**3
+                return S, S * (1 - S) * dq, S * (1 - S) * (1 - 2 * S) * dq**2 + S * (1 - S) * d2q
+
+            def cut(x):
+                if abs(x) >= l2:
+                    return (k if x > 0 else mpmath.mpf(0)), mpmath.mpf(0), mpmath.mpf(0)
+                e = mpmath.exp(-lam * x)
+                psi = k / (1 + e)
+                gap = -k * e / (1 + e) if x > 0 else psi
+                dpsi = lam * psi * (1 - psi / k)
+                d2psi = dW(psi) / al**2
+                S, S1, S2 = step((l2 - abs(x)) / (l2 - l1))
+                w = l2 - l1
+                sg = 1 if x > 0 else -1
+                chi, dchi, d2chi = S, -sg * S1 / w, S2 / w**2
+                H = k if x > 0 else 0
+                return (H + chi * gap, dchi * gap + chi * dpsi,
+                        d2chi * gap + 2 * dchi * dpsi + chi * d2psi)
+
+            out = []
+            for s in np.atleast_1d(sigma):
+                s = mpmath.mpf(float(s))
+                v0 = v2 = mpmath.mpf(0)
+                for c, a in zip(self.c, self.a, strict=True):
+                    y = s - mpmath.mpf(float(c))
+                    y = (y + L / 2) % L - L / 2
+                    a = mpmath.mpf(float(a))
+                    u, d = cut(y + a), cut(y - a)
+                    v0 += u[0] - d[0]
+                    v2 += u[2] - d[2]
+                out.append(-(al**2) * v2 + dW(v0))
+            return out
+
+
+# ------------------------------------------------------------------ closure
+def _fine_grid(front, L):
+    M = int(8 * L / front.width) + 1
+    M = max(M + (M + 1) % 2, 2049)
+    return Fourier(M)
+
+
+def _closure_and_jacobian(prof, fine, want_jac=True):
+    L = prof.L
+    sigma = L * fine.s
+    psi = prof(sigma)
+    theta = L * fine.cumulative(psi)
+    e = np.exp(1j * theta)
+    w = L * fine.weights
+    C = np.array([np.real(e @ w), np.imag(e @ w), psi @ w - 2 * np.pi])
+    if not want_jac:
+        return C, None
+    dpsi = prof.position_derivatives(sigma)  # (M, 2N)
+    dtheta = L * fine.cumulative(dpsi)
+    dC12 = (1j * e[:, None] * dtheta).T @ w
+    J = np.vstack([dC12.real, dC12.imag, dpsi.T @ w])
+    return C, J
+
+
+def _check_positions(positions, L, cutoff, front):
+    p = np.asarray(positions, dtype=float)
+    if p.ndim != 1 or p.size < 4 or p.size % 2:
+        raise ValueError(f"positions must be 2N >= 4 front positions, got shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError("positions contain NaN or inf")
+    if np.any(np.diff(p) <= 0) or p[-1] - p[0] >= L:
+        raise ValueError("positions must increase strictly and span less than the length L")
+    a_max = 0.5 * np.max(p[1::2] - p[0::2])
+    if cutoff is None:
+        l2 = 0.75 * (0.5 * L - a_max)  # margin: the closure solve may lengthen corners
+        cutoff = (0.5 * l2, l2)
+    l1, l2 = (float(v) for v in cutoff)
+    if not 0 < l1 < l2:
+        raise ValueError(f"cutoff=(l1, l2) needs 0 < l1 < l2, got {cutoff!r}")
+    if a_max + l2 > 0.5 * L + 1e-12 * L:
+        raise ValueError(
+            f"cutoff l2={l2} too long: a corner of half-length {a_max:.4g} plus l2 must not "
+            f"exceed L/2={0.5 * L:.4g}"
+        )
+    return p, (l1, l2)
+
+
+def _null_directions(J, n):
+    A = np.vstack([J, np.ones((1, n)) / np.sqrt(n)])
+    _, sv, Vt = np.linalg.svd(A)
+    return Vt[4:]  # (2N - 4, 2N): orthonormal, orthogonal to shifts, tangent to C = 0
+
+
+def splice(positions, alpha, well=None, grid=None, length=None, kstar=None, beta=5.0,
+           cutoff=None, solve=True, tol=1e-12, max_iter=30):
+    """The 2N-front splice ``psi_N`` from front positions, closed to ``tol``.
+
+    Parameters
+    ----------
+    positions : array_like, shape (2N,)
+        Arc-length positions of the fronts, increasing, up-front first: corner ``i``
+        is ``[p_{2i-1}, p_{2i}]``.
+    alpha : float
+        ``> 0``.
+    well, kstar
+        As in :func:`heteroclinic`.
+    grid : Grid, int or None
+        Grid of the returned curve (``None``: a Fourier grid resolving the fronts).
+    length : float
+        Total length ``L`` (required).
+    beta : float
+        Perimeter penalty; ``L* = L`` balances it (``R_g`` has no perimeter term).
+    cutoff : (float, float), optional
+        Fixed arc lengths ``(l1, l2)`` of the front cutoff; default the largest
+        ``l2 = 0.75 (L/2 - max a_i)`` (a_i the corner half-lengths) and ``l1 = l2 / 2``.
+    solve : bool
+        Move the positions (minimum-norm Gauss-Newton) until ``|C| <= tol``.
+
+    Returns
+    -------
+    Equilibrium
+        ``kind="splice"``; ``params`` with ``positions`` (solved), ``L``, ``L_star``,
+        ``nu1 = nu2 = 0``, ``d_min``, ``cutoff``; ``extra`` with ``R_kappa``, ``R_g``
+        (at the nodes), ``free_directions`` (shape (2N - 4, 2N)), ``profile``
+        (:class:`SpliceProfile`), ``iterations``. ``success`` means closure reached.
+
+    Raises
+    ------
+    ValueError
+        Bad positions, length, cutoff or alpha.
+    """
+    from qsa.curve import Curve
+    from qsa.energies import Faceting, Perimeter
+    from qsa.equilibria.npulse import _grid, faceting_residual, resolving_size
+
+    alpha = _positive(alpha, "alpha")
+    beta = _positive(beta, "beta")
+    if length is None:
+        raise ValueError("length (the total arc length L) is required")
+    L = _positive(length, "length")
+    well, kstar = resolve_well(well, kstar)
+    front = heteroclinic(alpha, well, kstar)
+    p, cut = _check_positions(positions, L, cutoff, front)
+    fine = _fine_grid(front, L)
+    history = []
+    C, J = _closure_and_jacobian(SpliceProfile(front, p, L, cut), fine)
+    history.append(float(np.linalg.norm(C)))
+    it = 0
+    while solve and history[-1] > tol and it < max_iter:
+        step = np.linalg.lstsq(J, -C, rcond=None)[0]
+        p = p + step
+        it += 1
+        if np.any(np.diff(p) <= 0):
+            raise ValueError(
+                "the splice cannot close: the closure solve makes fronts cross (corners or "
+                "facets of non-positive length); start from positions nearer a closed polygon"
+            )
+        C, J = _closure_and_jacobian(SpliceProfile(front, p, L, cut), fine)
+        history.append(float(np.linalg.norm(C)))
+    p, cut = _check_positions(p, L, cut, front)
+    prof = SpliceProfile(front, p, L, cut)
+
+    def kappa_of_s(s):
+        return prof(L * np.asarray(s))
+
+    grid = _grid(grid, kappa_of_s) if grid is not None else Fourier(resolving_size(kappa_of_s))
+    base = Curve(kappa_of_s(grid.s), L, grid)
+    centre = (base.positions() @ base.dsigma) / L
+    curve = Curve(base.kappa, L, grid, 0.0, tuple(-centre))
+    energy = Faceting(alpha, kstar, well) + Perimeter(beta, L)
+    R_kappa, R_g = prof.residuals(L * grid.s)
+    res, scale = faceting_residual(energy, curve, alpha, well)
+    closure = float(np.linalg.norm(curve.closure()))
+    gaps = np.diff(np.append(p, p[0] + L))
+    ok = history[-1] <= tol
+    msg = (f"splice: closure {history[-1]:.1e} after {it} Gauss-Newton steps; "
+           f"max|R_kappa| = {np.max(np.abs(R_kappa)):.2e}, max|V^n| = {res:.2e}")
+    if not ok:
+        msg += f"; closure above tol={tol}"
+    params = {"nu1": 0.0, "nu2": 0.0, "L": L, "L_star": L, "alpha": alpha, "beta": beta,
+              "kstar": kstar, "positions": p.tolist(), "d_min": float(gaps.min()),
+              "cutoff": list(cut), "n_corners": p.size // 2}
+    extra = {"R_kappa": R_kappa, "R_g": R_g, "free_directions": _null_directions(J, p.size),
+             "profile": prof, "iterations": it, "closure_history": history}
+    return Equilibrium(curve, energy, params, np.zeros(3), res, closure, scale, "splice", ok,
+                       msg, extra)
+
+
+def polygon_positions(angles, facets, kstar):
+    """Front positions of the sharp rounded polygon with these corners and facets.
+
+    Corner ``i`` (exterior angle ``angles[i]``) is an arc of curvature ``kstar`` and
+    length ``angles[i] / kstar``; it is followed by the straight facet ``facets[i]``.
+    ``s = 0`` is the middle of the last facet.
+
+    Returns
+    -------
+    positions : ndarray, shape (2N,)
+    length : float
+
+    Raises
+    ------
+    ValueError
+        Angles not positive or not summing to 2 pi, facets not positive, or the
+        sharp polygon far from closing (its closure defect is reported).
+    """
+    ang = np.asarray(angles, dtype=float)
+    fac = np.asarray(facets, dtype=float)
+    if ang.ndim != 1 or ang.size < 2 or fac.shape != ang.shape:
+        raise ValueError("angles and facets must be 1-d arrays of the same length N >= 2")
+    if not (np.all(np.isfinite(ang)) and np.all(np.isfinite(fac))):
+        raise ValueError("angles and facets must be finite")
+    if np.any(ang <= 0):
+        raise ValueError("angles must be positive (corners turn towards kstar > 0)")
+    if abs(ang.sum() - 2 * np.pi) > 1e-9:
+        raise ValueError(f"angles must sum to 2 pi (a closed curve), got {ang.sum()!r}")
+    if np.any(fac <= 0):
+        raise ValueError("facets must have positive lengths")
+    arcs = ang / kstar
+    pos, s = [], 0.5 * fac[-1]  # s = 0 in the middle of the last facet
+    for arc, f in zip(arcs, fac, strict=True):
+        pos += [s, s + arc]
+        s += arc + f
+    return np.array(pos), s - 0.5 * fac[-1]
+
+
+def _sharp_facets(arcs, angles, facets, kstar):
+    """Minimum-norm change of the facets that closes the sharp rounded polygon.
+
+    Corner i turns from direction ``phi_i`` by ``angles[i]`` along an arc of radius
+    ``1/kstar``; facet i then runs in direction ``phi_{i+1}``. Closure is linear in
+    the facets: ``sum f_i e^{i phi_{i+1}} = -sum chord_i``.
+    """
+    phi = np.concatenate([[0.0], np.cumsum(angles)])
+    chords = (np.exp(1j * phi[1:]) - np.exp(1j * phi[:-1])) / (1j * kstar)
+    A = np.vstack([np.cos(phi[1:]), np.sin(phi[1:])])
+    rhs = -np.array([chords.sum().real, chords.sum().imag]) - A @ facets
+    return facets + np.linalg.lstsq(A, rhs, rcond=None)[0]
+
+
+def splice_polygon(angles, facets, alpha, well=None, grid=None, kstar=None, tol=1e-12,
+                   max_iter=30, **kwargs):
+    """A splice shaped like a rounded polygon with the given corner angles.
+
+    Corner ``i`` turns by ``angles[i]`` (an arc of curvature ``kstar`` between an up- and
+    a down-front) and is followed by a facet of length close to ``facets[i]``. The
+    angles are kept; the facets are changed by the smallest amount (least squares)
+    that closes the curve -- first for sharp fronts (a linear problem), then with the
+    real fronts by Gauss-Newton steps in the facet lengths.
+
+    Parameters
+    ----------
+    angles : array_like, shape (N,)
+        Exterior corner angles, positive, summing to ``2 pi``.
+    facets : array_like, shape (N,)
+        Requested facet lengths, positive.
+    alpha, well, grid, kstar, tol, max_iter
+        As in :func:`splice`; further keyword arguments are passed on to it.
+
+    Raises
+    ------
+    ValueError
+        Invalid polygon data (see :func:`polygon_positions`), or a polygon that cannot
+        close with these angles and facets longer than two front widths (e.g. two
+        corners that are not both ``pi``).
+    """
+    well, kstar = resolve_well(well, kstar)
+    alpha = _positive(alpha, "alpha")
+    positions, _ = polygon_positions(angles, facets, kstar)
+    ang = np.asarray(angles, dtype=float)
+    arcs = ang / kstar
+    f = _sharp_facets(arcs, ang, np.asarray(facets, dtype=float), kstar)
+
+    def cannot_close(f):
+        raise ValueError(
+            f"the polygon cannot close with angles {np.round(ang, 6).tolist()}: closing it "
+            f"needs facet lengths {np.round(f, 6).tolist()}, not all longer than two front "
+            f"widths ({2 * front.width:.3g})"
+        )
+
+    front = heteroclinic(alpha, well, kstar)
+    if np.any(f <= 2 * front.width):
+        cannot_close(f)
+    cutoff = kwargs.pop("cutoff", None)
+
+    def closure(f):
+        p, L = polygon_positions(ang, f, kstar)
+        p, cut = _check_positions(p, L, cutoff, front)
+        C, _ = _closure_and_jacobian(SpliceProfile(front, p, L, cut), _fine_grid(front, L),
+                                     want_jac=False)
+        return C[:2]
+
+    C = closure(f)
+    for _ in range(max_iter):
+        if np.linalg.norm(C) <= 0.1 * tol:
+            break
+        h = 1e-7 * np.max(f)
+        J = np.column_stack([(closure(f + h * e) - closure(f - h * e)) / (2 * h)
+                             for e in np.eye(f.size)])
+        f = f + np.linalg.lstsq(J, -C, rcond=None)[0]
+        if np.any(f <= 2 * front.width):
+            cannot_close(f)
+        C = closure(f)
+    positions, L = polygon_positions(ang, f, kstar)
+    eq = splice(positions, alpha, well, grid, length=L, kstar=kstar, tol=tol,
+                max_iter=max_iter, cutoff=cutoff, **kwargs)
+    eq.params["angles"] = ang.tolist()
+    eq.params["facets"] = f.tolist()
+    return eq
