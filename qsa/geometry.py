@@ -32,6 +32,7 @@ __all__ = [
     "grad_s",
     "laplace_s",
     "helmholtz",
+    "apply_laplace_s",
     "M",
     "M_adjoint",
     "MMdagger",
@@ -63,6 +64,14 @@ def laplace_s(c: Curve):
     E = grid.edge_difference()
     ge = grid.edge_average() @ c.g
     return -(grid.diag(1.0 / c.g) @ (E.T @ (grid.diag(1.0 / ge) @ E)))
+
+
+def apply_laplace_s(c: Curve, f) -> np.ndarray:
+    """``Delta_s f`` without forming the matrix (three sparse/dense products), shape (N,)."""
+    grid = c.grid
+    E = grid.edge_difference()
+    ge = grid.edge_average() @ c.g
+    return -(E.T @ ((E @ f) / ge)) / c.g
 
 
 def helmholtz(c: Curve):
@@ -173,9 +182,11 @@ def constraint_hessians(c: Curve) -> list:
     # eta = kappa1 + kappa g1/g, B = D-dagger(tau'_j g1/g), C = D-dagger(tau_j D eta):
     #   (H_Cj U1)_kappa = (g1/g) D-dagger tau'_j + B - C,
     #   (H_Cj U1)_g     = (kappa1/g) D-dagger tau'_j + tau'_j (D eta)/g + (kappa/g)(B - C).
-    # D acts on integrands that are not periodic off the constraint manifold: with
-    # finite differences (trapezoid) that is second order; on Fourier grids the
-    # cumulative integral of a non-periodic integrand is only first order.
+    # D-dagger(tau_j D eta) is evaluated by parts (its integrand is not periodic
+    # when int eta dsigma != 0), so all quadratures act on periodic integrands.
+    # B, D eta and C still jump across s = 0 == 1; with the mean value at node 0 the
+    # quadratic form is second order on both grid kinds (checked against exact
+    # second differences of C in the tests).
     """
     grid = c.grid
     N = c.N
@@ -183,8 +194,12 @@ def constraint_hessians(c: Curve) -> list:
     th = c.theta()
     tau = np.array([np.cos(th), np.sin(th)])
     taup = np.array([-np.sin(th), np.cos(th)])  # d tau / d theta = -n
+    # D f and D-dagger f jump across s = 0 == 1 when int f dsigma != 0. The quadratic
+    # form integrates (periodic) x (one such function); taking the mean of the two
+    # one-sided limits at node 0 turns the periodic rule into the trapezoid rule for it.
     D = D_matrix(c)
-    Dd = D_adjoint_matrix(c)
+    D[0] = 0.5 * c.dsigma
+    Dd = c.dsigma[None, :] - D
     # eta = [I, diag(k/g)] U1 ; D eta
     Eta = np.hstack([np.eye(N), np.diag(k / g)])
     DEta = D @ Eta
@@ -192,7 +207,13 @@ def constraint_hessians(c: Curve) -> list:
     for j in range(2):
         Dd_taup = Dd @ taup[j]
         Bop = Dd @ np.hstack([np.zeros((N, N)), np.diag(taup[j] / g)])
-        Cop = Dd @ (tau[j][:, None] * DEta)
+        # C = D-dagger(tau_j D eta) by parts, so that every integrand is periodic:
+        # with A_j = D tau_j (periodic on closed curves),
+        # C = A_j(1) (D eta)(1) - A_j (D eta) - D-dagger(A_j eta).
+        Aj = D @ tau[j]
+        Aj1 = tau[j] @ c.dsigma
+        total = np.outer(np.ones(N), c.dsigma) @ Eta
+        Cop = Aj1 * total - Aj[:, None] * DEta - Dd @ (Aj[:, None] * Eta)
         BC = Bop - Cop
         top = np.hstack([np.zeros((N, N)), np.diag(Dd_taup / g)]) + BC
         bottom = (np.hstack([np.diag(Dd_taup / g), np.zeros((N, N))])

@@ -1,0 +1,245 @@
+import numpy as np
+import pytest
+
+from qsa import Curve, FiniteDifference, Fourier, geometry
+from qsa.energies import (
+    CanhamHelfrich,
+    DoubleWell,
+    Faceting,
+    FirstOrderEnergy,
+    Perimeter,
+    Well,
+)
+from qsa.linalg import to_dense
+from tests.helpers import fitted_order, inner, skew_curve
+
+
+def coupled_energy():
+    """A density with a p-k coupling (F10 != 0) and non-quadratic dependence."""
+    return FirstOrderEnergy(
+        F=lambda p, k: 0.01 * p**2 + 0.02 * p * k**2 + np.cosh(0.5 * k),
+        F_p=lambda p, k: 0.02 * p + 0.02 * k**2,
+        F_k=lambda p, k: 0.04 * p * k + 0.5 * np.sinh(0.5 * k),
+        F_pp=lambda p, k: 0.02 + 0 * p,
+        F_pk=lambda p, k: 0.04 * k,
+        F_kk=lambda p, k: 0.04 * p + 0.25 * np.cosh(0.5 * k),
+    )
+
+
+def sextic_well(kstar=3.0):
+    # W = k^2 (k - k*)^2 (1 + k^2) / 4: equal wells at 0 and k*, not quartic
+    W = lambda k: 0.25 * k**2 * (k - kstar) ** 2 * (1 + k**2)
+    dW = lambda k: 0.25 * (2 * k * (k - kstar) ** 2 * (1 + k**2) + 2 * k**2 * (k - kstar)
+                           * (1 + k**2) + 2 * k**3 * (k - kstar) ** 2)
+    h = 1e-5
+    d2W = lambda k: (dW(k + h) - dW(k - h)) / (2 * h)
+    return Well(W, dW, d2W, kstar=kstar)
+
+
+ENERGIES = {
+    "faceting": Faceting(alpha=0.1, kstar=5.0) + Perimeter(beta=5.0, L_star=6.0),
+    "helfrich": CanhamHelfrich(eps=0.1) + Perimeter(beta=1.0, L_star=9.0),
+    "coupled": coupled_energy(),
+    "userwell": Faceting(alpha=0.2, kstar=3.0, well=sextic_well()),
+}
+GRIDS = {"fourier": Fourier(65), "fd": FiniteDifference(64)}
+
+
+def off_manifold(grid, seed=0):
+    """A smooth, non-closed state: a closed curve plus a perturbation of kappa and g."""
+    c = skew_curve(grid)
+    rng = np.random.default_rng(seed)
+    s = grid.s
+    dk = 0.2 * rng.standard_normal() * np.cos(2 * np.pi * s + rng.uniform()) + 0.1
+    dg = 0.3 * np.sin(4 * np.pi * s + rng.uniform()) * c.g.mean() * 0.2
+    return Curve(c.kappa + dk, c.g + dg, grid, c.theta0, c.origin)
+
+
+def directions(grid, seed):
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(3):
+        v = rng.standard_normal(2 * grid.N)
+        out.append(v / np.linalg.norm(v))
+    s = grid.s
+    out.append(np.concatenate([np.cos(6 * np.pi * s), 0.5 * np.sin(2 * np.pi * s)]))
+    return out
+
+
+@pytest.mark.parametrize("gname", GRIDS)
+@pytest.mark.parametrize("ename", ENERGIES)
+def test_gradient_is_derivative_of_energy(ename, gname):
+    E, grid = ENERGIES[ename], GRIDS[gname]
+    c = off_manifold(grid)
+    grad = E.gradient(c)
+    for U1 in directions(grid, 1):
+        d = 1e-6 * np.linalg.norm(c.U) / np.linalg.norm(U1)
+        f = lambda t: E.energy(c.with_U(c.U + t * U1))
+        num = (-f(2 * d) + 8 * f(d) - 8 * f(-d) + f(-2 * d)) / (12 * d)
+        ana = inner(c, grad, U1)
+        scale = np.sqrt(inner(c, grad, grad) * inner(c, U1, U1))
+        assert abs(num - ana) <= 1e-8 * scale, (num, ana)
+
+
+@pytest.mark.parametrize("gname", GRIDS)
+@pytest.mark.parametrize("ename", ENERGIES)
+def test_hessian_is_second_derivative_and_self_adjoint(ename, gname):
+    E, grid = ENERGIES[ename], GRIDS[gname]
+    c = off_manifold(grid, seed=3)
+    H = E.hessian(c)
+    Hd = to_dense(H)
+    for U1 in directions(grid, 2):
+        d = 1e-4 * np.linalg.norm(c.U) / np.linalg.norm(U1)
+        f = lambda t: E.energy(c.with_U(c.U + t * U1))
+        num = (-f(2 * d) + 16 * f(d) - 30 * f(0) + 16 * f(-d) - f(-2 * d)) / (12 * d**2)
+        ana = inner(c, H @ U1, U1)
+        bound = max(abs(ana), np.abs(Hd).max() * inner(c, U1, U1))
+        assert abs(num - ana) <= 2e-6 * bound, (num, ana)
+        # directional derivative of the gradient (mixed check of H's action)
+        dg = (E.gradient(c.with_U(c.U + d * U1)) - E.gradient(c.with_U(c.U - d * U1))) / (2 * d)
+        V = directions(grid, 9)[0]
+        # <H U1, V> = d/dd <grad E, V>_{sigma fixed at c}: compare through the Euclidean form
+        ds2 = np.concatenate([c.dsigma, c.dsigma])
+        lhs = (H @ U1) @ (V * ds2)
+        Ueps = lambda t: c.with_U(c.U + t * U1)
+        rhs = (E.gradient(Ueps(d)) * np.concatenate([Ueps(d).dsigma] * 2)
+               - E.gradient(Ueps(-d)) * np.concatenate([Ueps(-d).dsigma] * 2)) @ V / (2 * d)
+        assert abs(lhs - rhs) <= 1e-6 * (abs(lhs) + np.abs(Hd).max() * 1e-3)
+        assert dg.shape == U1.shape
+    W = np.concatenate([c.dsigma, c.dsigma])
+    A = W[:, None] * Hd
+    assert np.abs(A - A.T).max() <= 1e-12 * np.abs(A).max()
+
+
+def test_fd_hessian_is_sparse_plus_rank_one():
+    from qsa.linalg import SparsePlusLowRank
+
+    c = skew_curve(FiniteDifference(64))
+    H = ENERGIES["faceting"].hessian(c)
+    assert isinstance(H, SparsePlusLowRank) and H.rank == 1
+    assert H.S.nnz < 20 * c.N
+
+
+def test_perimeter_hessian_rank_one_formula():
+    c = off_manifold(Fourier(33))
+    P = Perimeter(beta=3.0, L_star=2.0)
+    g1 = np.sin(2 * np.pi * c.grid.s) + 0.5
+    HU = P.hessian(c) @ np.concatenate([np.zeros(c.N), g1])
+    assert np.allclose(HU[c.N:], 3.0 / c.g * np.mean(g1))
+    assert np.allclose(HU[: c.N], 0)
+
+
+@pytest.mark.parametrize("ename", ["faceting", "helfrich", "userwell"])
+def test_W_invar_identity(ename):
+    """M-dagger_2 grad E = d_kappa E grad_s kappa - grad_s(g d_g E) = 0 for any U (e:W-invar).
+
+    Reparameterization invariance holds for the continuum energy: spectrally small on
+    Fourier grids, second order on finite differences; the perimeter term alone is exact.
+    """
+    E = ENERGIES[ename]
+
+    def state(grid):
+        c = Curve.polar(lambda t: 1.5 + 0.1 * np.cos(3 * t) + 0.05 * np.sin(2 * t), grid)
+        s = grid.s
+        return Curve(c.kappa + 0.1 + 0.1 * np.cos(2 * np.pi * s), c.g * (1 + 0.1 * np.sin(
+            2 * np.pi * s + 0.4)), grid, c.theta0, c.origin)
+
+    c = state(Fourier(257))
+    r = geometry.M_adjoint(c) @ E.gradient(c)
+    assert np.abs(r[c.N:]).max() < 1e-8 * np.abs(E.gradient(c)).max()
+    Ns = [256, 512, 1024]
+    errs = []
+    for N in Ns:
+        c = state(FiniteDifference(N))
+        errs.append(np.abs((geometry.M_adjoint(c) @ E.gradient(c))[N:]).max())
+    assert abs(fitted_order(Ns, errs) - 2) < 0.25
+
+
+@pytest.mark.parametrize("ename", ["faceting", "helfrich"])
+def test_dissipation_rate(ename):
+    """gamma_t = V^n n changes the (position-based) energy at the rate -int (V^n)^2 dsigma."""
+    E = ENERGIES[ename]
+    grid = Fourier(201)
+    c = Curve.polar(lambda t: 1.3 + 0.15 * np.cos(3 * t) + 0.1 * np.sin(2 * t + 0.3), grid)
+    V = E.normal_velocity(c)
+    x, y = c.positions()
+    n = c.normal()
+    rate = -np.sum(V**2 * c.dsigma)
+    dt = 1e-4 / np.abs(V).max()
+
+    def energy_after(t):
+        return E.energy(Curve.from_positions(x + t * V * n[0], y + t * V * n[1], grid))
+
+    num = (energy_after(dt) - energy_after(-dt)) / (2 * dt)
+    assert num / rate == pytest.approx(1.0, abs=1e-4)
+
+
+def test_faceting_normal_velocity_matches_printed_formula():
+    """e:Facet-NV: V = -G(-a^2 Lap k + W'(k)) - k(-a^2/2 |grad k|^2 + W(k) + beta(L - L*))."""
+    E = ENERGIES["faceting"]
+    c = skew_curve(Fourier(129))
+    lap, G = to_dense(geometry.laplace_s(c)), to_dense(geometry.helmholtz(c))
+    k = c.kappa
+    w = DoubleWell(5.0)
+    ks = c.grad_s(k)
+    mu = -0.01 * lap @ k + w.dW(k)
+    ref = -G @ mu - k * (-0.005 * ks**2 + w.W(k) + 5.0 * (c.length() - 6.0))
+    assert np.abs(E.normal_velocity(c) - ref).max() < 1e-9 * np.abs(ref).max()
+
+
+def test_helfrich_normal_velocity_formula():
+    """V = eps(Lap k + k^3/2) - beta (L - L*) k (MATH.md section 3)."""
+    E = ENERGIES["helfrich"]
+    c = skew_curve(Fourier(129))
+    k = c.kappa
+    ref = 0.1 * (to_dense(geometry.laplace_s(c)) @ k + k**3 / 2) - 1.0 * (c.length() - 9.0) * k
+    assert np.abs(E.normal_velocity(c) - ref).max() < 1e-10 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("grid", [Fourier(33), FiniteDifference(32)])
+@pytest.mark.parametrize("R", [0.4, 1.0, 2.5])
+def test_circle_equilibrium_length(grid, R):
+    k0 = 1 / R
+    w = DoubleWell(5.0)
+    beta = 5.0
+    Lstar = 2 * np.pi * R - (k0 * w.dW(k0) - w.W(k0)) / beta
+    c = Curve.circle(R, grid)
+    assert np.allclose(c.kappa, k0) and np.abs(c.closure()).max() < 1e-12
+    E = Faceting(alpha=0.1, kstar=5.0) + Perimeter(beta=beta, L_star=Lstar)
+    V = E.normal_velocity(c)
+    assert np.abs(V).max() < 1e-10 * (abs(k0 * w.W(k0)) + k0**3)
+    # a shifted L* does not give an equilibrium: V = -beta (L - L*) k0 changes by beta dL k0
+    E2 = Faceting(alpha=0.1, kstar=5.0) + Perimeter(beta=beta, L_star=Lstar + 0.1)
+    assert np.allclose(E2.normal_velocity(c), beta * 0.1 * k0)
+    eps = 0.3
+    Lh = 2 * np.pi * R - eps * k0**2 / (2 * beta)
+    Eh = CanhamHelfrich(eps) + Perimeter(beta=beta, L_star=Lh)
+    assert np.abs(Eh.normal_velocity(c)).max() < 1e-10 * (eps * k0**3)
+
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: Faceting(alpha=0.0, kstar=5.0), "alpha"),
+        (lambda: Faceting(alpha=-0.1, kstar=5.0), "alpha"),
+        (lambda: Faceting(alpha=0.1, kstar=np.nan), "kstar"),
+        (lambda: Faceting(alpha=0.1, kstar=5.0, well=object()), "well"),
+        (lambda: CanhamHelfrich(eps=-1.0), "eps"),
+        (lambda: Perimeter(beta=-1.0, L_star=1.0), "beta"),
+        (lambda: Perimeter(beta=1.0, L_star=0.0), "L_star"),
+        (lambda: Perimeter(beta="x", L_star=1.0), "beta"),
+        (lambda: FirstOrderEnergy(1, 2, 3, 4, 5, 6), "callable"),
+    ],
+)
+def test_bad_parameters(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_energy_sums():
+    F, P = Faceting(0.1, 5.0), Perimeter(5.0, 6.0)
+    c = skew_curve(Fourier(33))
+    S = F + P
+    assert S.energy(c) == pytest.approx(F.energy(c) + P.energy(c))
+    assert np.allclose(S.gradient(c), F.gradient(c) + P.gradient(c))
+    assert len((S + CanhamHelfrich(0.1)).terms()) == 3
