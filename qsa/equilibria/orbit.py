@@ -80,6 +80,7 @@ class _Family:
     closed: bool  # quartic well and nu1 == 0: exact roots
     star: float = None  # polynomial path: the well of P whose level is the separatrix
     q: np.ndarray = None  # Taylor coefficients of W + nu1 psi about `star` (ascending)
+    q_wells: tuple = None  # the same about s_lo and about s_hi
 
     def P(self, psi, nu2):
         return self.well.W(psi) + self.nu1 * psi + nu2
@@ -122,12 +123,22 @@ def _poly_family(well, kstar, nu1, coef) -> _Family:
             "alpha^2 psi'' - W'(psi) = nu1 has no periodic orbits (|nu1| too large)"
         )
     c, s_lo, s_hi = crit[best], crit[best - 1], crit[best + 1]
-    star = s_hi if P0(s_hi) >= P0(s_lo) else s_lo
-    q = (P0(np.polynomial.Polynomial([star, 1.0]))).coef
-    q = np.r_[q, np.zeros(max(0, 3 - len(q)))]
-    q[1] = 0.0  # star is a critical point of P0 (exactly, in the shifted coordinate)
+    if nu1 == 0.0 and abs(s_lo) < 1e-8 * kstar and abs(s_hi - kstar) < 1e-8 * kstar:
+        s_lo, s_hi = 0.0, kstar  # the wells themselves, exactly
+
+    def taylor(s0):
+        q = (P0(np.polynomial.Polynomial([s0, 1.0]))).coef
+        q = np.r_[q, np.zeros(max(0, 3 - len(q)))]
+        q[1] = 0.0  # s0 is a critical point of P0 (exactly, in the shifted coordinate)
+        return q
+
+    q_lo, q_hi = taylor(s_lo), taylor(s_hi)
+    if nu1 == 0.0:  # equal-depth wells (checked by resolve_well): equal levels exactly
+        q_lo[0] = q_hi[0] = 0.0
+    star = s_hi if q_hi[0] >= q_lo[0] else s_lo
+    q = q_hi if star == s_hi else q_lo
     return _Family(well, kstar, float(nu1), c, s_lo, s_hi, -float(P0(c)), -float(q[0]),
-                   False, star, q)
+                   False, star, q, (q_lo, q_hi))
 
 
 def _family(well, kstar, nu1) -> _Family:
@@ -272,47 +283,40 @@ def _Q_difference_quotient(q, y, x):
 
 
 def _poly_orbit(fam, nu2, ystar):
-    """Turning points and ``R`` for a polynomial well, exact near the separatrix well.
+    """Turning points and ``R`` for a polynomial well, exact near both wells of P.
 
     The orbit is labelled by ``ystar`` = (turning point near ``star``) - ``star``; then
-    ``nu2 = nu2_sep - Q(ystar)`` and, near that turning point, ``P(t + x)/x`` is the
-    difference quotient of ``Q`` -- a sum of same-sign terms, accurate even when
-    ``|ystar|`` is far below the rounding unit of ``star``.
+    ``nu2 = nu2_sep - Q*(ystar)`` with ``Q*`` the Taylor polynomial of P about ``star``
+    without its constant. The other turning point is ``s_o + y_o`` with
+    ``Q_o(y_o) = Q*(ystar) + (P(star) - P(s_o))`` about the other well ``s_o``. Near each
+    turning point ``P(t + x) / x`` is the difference quotient of the Taylor polynomial
+    there -- sums of same-sign terms, accurate even when the offsets are far below
+    the rounding unit of the wells' positions.
     """
-    q, star = fam.q, fam.star
-    if ystar is None:  # from nu2: Q(ystar) = nu2_sep - nu2 on the segment star -> c
+    q_lo, q_hi = fam.q_wells
+    high = fam.star == fam.s_hi  # the separatrix is reached at the upper well
+    if ystar is None:  # from nu2: Q*(ystar) = nu2_sep - nu2 on the segment star -> c
         target = fam.nu2_sep - nu2
-        ystar = brentq(lambda y: _Q(q, y) - target, 0.0, fam.c - star, xtol=1e-300,
+        ystar = brentq(lambda y: _Q(fam.q, y) - target, 0.0, fam.c - fam.star, xtol=1e-300,
                        rtol=1e-15, maxiter=500)
     else:
-        nu2 = fam.nu2_sep - _Q(q, ystar)
-    level = _Q(q, ystar)
-    other_end = fam.s_lo if star == fam.s_hi else fam.s_hi
-    other = brentq(lambda x: _Q(q, x - star) - level, fam.c, other_end, xtol=1e-300,
-                   rtol=1e-15, maxiter=500)
-    t = star + ystar
-    high = star == fam.s_hi  # the separatrix turning point is b (else a)
-    a, b = (other, t) if high else (t, other)
-    far = a if high else b  # the ordinary turning point
-    d_star = abs(ystar)
-    d_far = abs(float(fam.dP(far)) / float(fam.well.d2W(far)))
+        nu2 = fam.nu2_sep - _Q(fam.q, ystar)
+    level = _Q(fam.q, ystar)
+    s_o, q_o = (fam.s_lo, q_lo) if high else (fam.s_hi, q_hi)
+    level_o = level + (fam.q[0] - q_o[0])
+    y_o = brentq(lambda y: _Q(q_o, y) - level_o, 0.0, fam.c - s_o, xtol=1e-300, rtol=1e-15,
+                 maxiter=500)
+    y_a, y_b = (y_o, ystar) if high else (ystar, y_o)
+    a, b = fam.s_lo + y_a, fam.s_hi + y_b
 
     def R(xa, xb, v):
-        near = (v > 0) if high else (v <= 0)
-        # star side: P(t -+ x) / x from the exact difference quotient
-        x_star = np.where(near, xb if high else xa, 0.0)
-        sgn = -1.0 if high else 1.0
-        pq = sgn * _Q_difference_quotient(q, ystar, sgn * x_star)
-        # far side: P(far +- x) = x mean(P') on the segment
-        x_far = np.where(near, 0.0, xa if high else xb)
-        fs = 1.0 if high else -1.0
-        pts = far + (fs * x_far)[..., None] * _MEAN_X
-        pm = fs * (fam.dP(pts) @ _MEAN_W)
-        P_over_x = np.where(near, pq, pm)
-        return P_over_x / np.where(near, xa if high else xb, xb if high else xa)
+        low = v <= 0
+        pa = _Q_difference_quotient(q_lo, y_a, np.where(low, xa, 0.0))  # P(a + x_a) / x_a
+        pb = -_Q_difference_quotient(q_hi, y_b, -np.where(low, 0.0, xb))  # P(b - x_b) / x_b
+        return np.where(low, pa / xb, pb / xa)
 
-    d_lo, d_hi = (d_far, d_star) if high else (d_star, d_far)
-    return a, b, nu2, d_star, R, d_lo, d_hi
+    depth = min(abs(y_a), abs(y_b))
+    return a, b, nu2, depth, R, abs(y_a), abs(y_b)
 
 
 def _build(fam: _Family, alpha, nu2, *, rho=None, ystar=None) -> PeriodicOrbit:
@@ -482,7 +486,7 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
 
         def orbit(t):
             return _build(fam, alpha, None, ystar=y0 * np.exp(-t))
-        t_max = 650.0
+        t_max = float(np.log(abs(y0) / 1e-150))  # keep Q(ystar) ~ ystar^2 above underflow
     else:
         span = fam.nu2_sep - fam.nu2_c
         floor = 64 * np.finfo(float).eps * max(abs(fam.nu2_sep), abs(fam.nu2_c))

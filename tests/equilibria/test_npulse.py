@@ -124,3 +124,15 @@ def test_nonzero_nu1_near_the_separatrix(n, alpha, nu1):
     assert eq.success, eq.message
     assert eq.closure <= 1e-10 and eq.residual <= 1e-8 * eq.residual_scale
     assert eq.params["turning"] * n == pytest.approx(2 * np.pi, rel=1e-13)
+
+
+@pytest.mark.parametrize("nu1", [0.0, 0.2])
+def test_polynomial_well_deep_plateaus(sextic_poly_well, sextic_well, nu1):
+    """A well declaring its coefficients gets the exact path (plateau depth ~1e-15 here)."""
+    eq = npulse(2, 0.05, sextic_poly_well, nu1=nu1)
+    assert eq.success, eq.message
+    assert eq.extra["orbit"].depth < 1e-12
+    assert eq.closure <= 1e-10 and eq.residual <= 1e-8 * eq.residual_scale
+    if nu1 == 0.0:  # the same well as plain callables cannot get this close in double
+        with pytest.raises(ValueError, match="separatrix"):
+            npulse(2, 0.05, sextic_well)
