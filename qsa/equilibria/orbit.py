@@ -32,14 +32,15 @@ cancellation: for the quartic with ``nu1 = 0`` from the exact roots
 (``R = (d + x_a)(d + x_b)/4``, ``x_a = psi - a``, ``x_b = b - psi``, ``d`` the gap to the
 outer roots); for polynomial wells (the quartic with ``nu1 != 0``, or a well with a
 ``coefficients`` attribute in ``numpy.polyval`` order) the orbit is labelled by the
-offset ``ystar`` of its turning point from the separatrix well ``s*`` of P, and near
-that turning point ``P`` is the exact difference quotient of the Taylor polynomial
-of P about ``s*`` -- accurate for any ``ystar`` down to the underflow limit, where
-double-precision roots would only resolve ``1e-16 s*``; elsewhere (and for other
-wells) ``P(psi) = x_a * mean(P')`` on ``[a, psi]`` (or its mirror at ``b``), which stays
-accurate at ordinary turning points. Non-polynomial wells are therefore limited
-to plateau depths well above ``1e-16 kstar``; :func:`orbit_with_turning` says so. The
-orbit is sampled by inverting ``sigma(v)`` with safeguarded Newton steps.
+offset ``ystar`` of its turning point from the separatrix well ``s*`` of P, the other
+turning point by its offset from the other well, and near each turning point
+``P/x`` is the exact difference quotient of the Taylor polynomial of P about that
+well -- accurate for offsets down to ~1e-150, where double-precision roots would
+only resolve ``1e-16 kstar``. For other wells ``P(psi) = x_a * mean(P')`` on
+``[a, psi]`` (or its mirror at ``b``), which stays accurate at ordinary turning
+points: non-polynomial wells are limited to plateau depths well above
+``1e-16 kstar`` (:func:`orbit_with_turning` says so). The orbit is sampled by
+inverting ``sigma(v)`` with safeguarded Newton steps.
 
 No multiple precision is needed on these paths; ``mpmath`` serves the tests as
 an independent reference.
