@@ -8,7 +8,8 @@ from qsa.equilibria import Equilibrium, circle, npulse
 
 K = 5.0
 
-CASES = [(n, a) for n in range(2, 9) for a in (0.05, 0.1, 0.2, 0.3) if n * a < 1]
+CASES = [(n, a) for n in range(2, 9) for a in (0.05, 0.1, 0.15, 0.2, 0.25, 0.3) if n * a < 1]
+CASES += [(3, 0.33), (2, 0.49)]  # close to the existence limit N alpha < 1
 
 
 @pytest.mark.parametrize(("n", "alpha"), CASES)
