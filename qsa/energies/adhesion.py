@@ -50,6 +50,8 @@ import scipy.sparse as sp
 from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
+from qsa.energies.base import Energy
+
 __all__ = [
     "AdhesionKernel",
     "pair_list",
@@ -62,6 +64,7 @@ __all__ = [
     "PairDerivatives",
     "adhesion_pair_derivatives",
     "adhesion_field_jacobians",
+    "Adhesion",
 ]
 
 
@@ -513,3 +516,90 @@ def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"
     JF = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                        shape=(2 * N, 2 * N))
     return JB, JF
+
+
+# --------------------------------------------------------- Curve-level energy
+class Adhesion(Energy):
+    """Two-point adhesion-repulsion energy of a :class:`~qsa.curve.Curve` (e:AdhE, e:LJ).
+
+    Parameters
+    ----------
+    A0 : float
+        Kernel height (repulsion at contact), ``> 0``.
+    l_star : float
+        Screening length, ``> 0``.
+    a : float
+        Shape parameter: ``A`` changes sign at ``|d| = a l_star``; paired sheets
+        settle at the separation ``l_star sqrt(a^2 + 1/2)`` (MATH.md section 6).
+    method : {"neighbours", "dense"}
+        Cutoff neighbour list (O(N) for a short-range kernel) or all pairs.
+
+    Notes
+    -----
+    The node quadrature is ``dsigma_j = g_j / N`` in both integrals, diagonal
+    included. Provided: ``energy``, ``fields`` (B and the force 𝔸),
+    ``extrinsic_gradient`` ``(𝔸.n + kappa B, 0)`` (e:Adh-Ex_grad),
+    ``normal_velocity`` ``-(𝔸.n + kappa B)`` (e:Adh-NV), and ``gradient``, the
+    intrinsic gradient ``(M-dagger)^{-1}`` of the extrinsic one (e:Adh-In_grad),
+    taken as the least-squares solution orthogonal to span Psi (dense, O(N^3)).
+    The intrinsic Hessian of a two-point energy is nonlocal and is not provided.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> E = Adhesion(A0=10.0, l_star=0.5, a=1.0)
+    >>> c = Curve.circle(1.0, Fourier(65))
+    >>> V = E.normal_velocity(c)          # constant on a circle
+    >>> bool(np.ptp(V) < 1e-10 * np.abs(V).max())
+    True
+    """
+
+    def __init__(self, A0, l_star, a=1.0, method="neighbours"):
+        if method not in ("neighbours", "dense"):
+            raise ValueError(f"method must be 'neighbours' or 'dense', got {method!r}")
+        self.kernel = AdhesionKernel(A0, l_star, a)
+        self.A0, self.l_star, self.a = self.kernel.A0, self.kernel.l_star, self.kernel.a
+        self.method = method
+
+    def __repr__(self):
+        return f"Adhesion(A0={self.A0}, l_star={self.l_star}, a={self.a})"
+
+    def _data(self, c):
+        x, y = c.positions()
+        return x, y, c.dsigma
+
+    def energy(self, c) -> float:
+        x, y, w = self._data(c)
+        return adhesion_energy(self.kernel, x, y, w, method=self.method)
+
+    def fields(self, c):
+        """``(B, force)``: B shape (N,), the force 𝔸 shape (N, 2)."""
+        x, y, w = self._data(c)
+        return adhesion_fields(self.kernel, x, y, w, method=self.method)
+
+    def extrinsic_gradient(self, c) -> np.ndarray:
+        """``(𝔸.n + kappa B, 0)`` in ``<.,.>``, shape (2N,) (e:Adh-Ex_grad)."""
+        B, force = self.fields(c)
+        n = c.normal()
+        return np.concatenate([force[:, 0] * n[0] + force[:, 1] * n[1] + c.kappa * B,
+                               np.zeros(c.N)])
+
+    def normal_velocity(self, c) -> np.ndarray:
+        """``V^n_A = -(𝔸.n + kappa B)``, shape (N,) (e:Adh-NV)."""
+        return -self.extrinsic_gradient(c)[: c.N]
+
+    def gradient(self, c) -> np.ndarray:
+        """Intrinsic gradient ``(M-dagger)^{-1} (𝔸.n + kappa B, 0)``, orthogonal to span Psi."""
+        from qsa import geometry
+        from qsa.linalg import to_dense
+
+        e = self.extrinsic_gradient(c)
+        w = np.sqrt(np.concatenate([c.dsigma, c.dsigma]))
+        Md = to_dense(geometry.M_adjoint(c))
+        y, *_ = np.linalg.lstsq(w[:, None] * Md / w[None, :], w * e, rcond=1e-10)
+        return y / w
+
+    def hessian(self, c):
+        raise NotImplementedError(
+            "the intrinsic Hessian of a two-point energy is nonlocal and not provided; "
+            "use extrinsic_gradient / normal_velocity, or the flow models' Jacobians")
