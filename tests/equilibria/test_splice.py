@@ -122,3 +122,18 @@ def test_non_quartic_well_splice(sine_well):
     assert np.max(np.abs(eq.extra["R_kappa"])) < 100 * np.exp(-lam * eq.params["d_min"]) * scale
     with pytest.raises(ValueError, match="quartic"):
         eq.extra["profile"].residual_kappa_mp([0.0])
+
+
+def test_paper_cutoff_scaling_with_alpha_gives_alpha_independent_error():
+    """The paper's cutoff |s| in [alpha l, 2 alpha l] leaves R ~ exp(-kstar l / sqrt 2)."""
+    from qsa.equilibria import heteroclinic
+
+    ell = 2.0
+    p, L = polygon_positions(TRIANGLE, [1.0] * 3, K)
+    s = np.linspace(0, L, 20001)
+    r = []
+    for alpha in (0.04, 0.06):
+        prof = SpliceProfile(heteroclinic(alpha, kstar=K), p, L, (alpha * ell, 2 * alpha * ell))
+        r.append(np.max(np.abs(prof.residuals(s)[0])))
+    assert r[1] == pytest.approx(r[0], rel=0.05)  # no decay with alpha
+    assert r[0] > 1e-3  # far above the fixed-cutoff residual ~ exp(-lambda d_min) ~ 1e-11
