@@ -126,6 +126,22 @@ class Grid:
         v = np.asarray(v, dtype=float)
         return sp.diags(v, format="csr") if self.sparse else np.diag(v)
 
+    def scale_rows(self, v, A):
+        """``diag(v) @ A`` without a dense diagonal product (O(N^2) for dense A)."""
+        v = np.asarray(v, dtype=float)
+        if sp.issparse(A):
+            return (sp.diags(v) @ A).tocsr()
+        return v[:, None] * A
+
+    def sandwich(self, X, b, Y):
+        """``X^T diag(b) Y`` for the grid's matrix type; ``None`` stands for the identity."""
+        b = np.asarray(b, dtype=float)
+        if Y is None:
+            right = self.diag(b)
+        else:
+            right = self.scale_rows(b, Y)
+        return right if X is None else X.T @ right
+
     # ----------------------------------------------------------- integration
     def cumulative(self, f) -> np.ndarray:
         """``F_j = int_0^{s_j} f ds`` of a periodic integrand ``f``, shape like ``f``."""

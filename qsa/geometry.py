@@ -55,7 +55,7 @@ def _bmat(blocks, grid):
 
 def grad_s(c: Curve):
     """``nabla_s = (1/g) d/ds`` as a matrix, shape (N, N)."""
-    return c.grid.diag(1.0 / c.g) @ c.grid.derivative()
+    return c.grid.scale_rows(1.0 / c.g, c.grid.derivative())
 
 
 def laplace_s(c: Curve):
@@ -63,7 +63,7 @@ def laplace_s(c: Curve):
     grid = c.grid
     E = grid.edge_difference()
     ge = grid.edge_average() @ c.g
-    return -(grid.diag(1.0 / c.g) @ (E.T @ (grid.diag(1.0 / ge) @ E)))
+    return -grid.scale_rows(1.0 / c.g, grid.sandwich(E, 1.0 / ge, E))
 
 
 def apply_laplace_s(c: Curve, f) -> np.ndarray:
@@ -90,7 +90,7 @@ def M(c: Curve):
     grid = c.grid
     ks = c.grad_s(c.kappa)
     return _bmat([[helmholtz(c), grid.diag(ks)],
-                  [grid.diag(c.g * c.kappa), grid.diag(c.g) @ grad_s(c)]], grid)
+                  [grid.diag(c.g * c.kappa), grid.scale_rows(c.g, grad_s(c))]], grid)
 
 
 def adjoint(c: Curve, A):

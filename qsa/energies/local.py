@@ -71,12 +71,19 @@ def _maps(c: Curve, term: Density):
     grid = c.grid
     if term.placement == "edge":
         Ed, A, w = grid.edge_difference(), grid.edge_average(), grid.edge_weights
+        if not grid.sparse:
+            A = None  # Fourier: the edges are the nodes
     else:
-        Ed, A, w = grid.derivative(), grid.identity(), grid.weights
-    ge = A @ c.g
-    ke = A @ c.kappa
+        Ed, A, w = grid.derivative(), None, grid.weights
+    ge = c.g if A is None else A @ c.g
+    ke = c.kappa if A is None else A @ c.kappa
     p = (Ed @ c.kappa) / ge if term.uses_p else np.zeros_like(ke)
     return Ed, A, w, ge, ke, p
+
+
+def _apply_T(A, v):
+    """``A^T v``; ``A = None`` is the identity."""
+    return v if A is None else A.T @ v
 
 
 def _as_array(v, like):
@@ -104,13 +111,13 @@ class LocalEnergy(Energy):
             Ed, A, w, ge, ke, p = _maps(c, t)
             f = _as_array(t.f(p, ke), ke)
             fk = _as_array(t.f_k(p, ke), ke)
-            dk += A.T @ (w * ge * fk)
+            dk += _apply_T(A, w * ge * fk)
             if t.uses_p:
                 fp = _as_array(t.f_p(p, ke), ke)
                 dk += Ed.T @ (w * fp)
-                dg += A.T @ (w * (f - p * fp))
+                dg += _apply_T(A, w * (f - p * fp))
             else:
-                dg += A.T @ (w * f)
+                dg += _apply_T(A, w * f)
         return np.concatenate([dk, dg])
 
     def gradient(self, c):
@@ -121,7 +128,7 @@ class LocalEnergy(Energy):
     def euclidean_hessian(self, c):
         """Second partial derivatives of the discrete energy, shape (2N, 2N), symmetric."""
         grid = c.grid
-        D = grid.diag
+        S = grid.sandwich  # S(X, b, Y) = X^T diag(b) Y
         zero = sp.csr_matrix((c.N, c.N)) if grid.sparse else np.zeros((c.N, c.N))
         total = None
         for t in self.densities():
@@ -134,13 +141,12 @@ class LocalEnergy(Energy):
                 # Phi = g_e f(q/g_e, k_e); its second derivatives in (q, k_e, g_e):
                 Bqq, Bqk, Bqg = w * fpp / ge, w * fpk, -w * p * fpp / ge
                 Bkk, Bkg, Bgg = w * ge * fkk, w * (fk - p * fpk), w * p**2 * fpp / ge
-                kk = (Ed.T @ D(Bqq) @ Ed + Ed.T @ D(Bqk) @ A + A.T @ D(Bqk) @ Ed
-                      + A.T @ D(Bkk) @ A)
-                kg = Ed.T @ D(Bqg) @ A + A.T @ D(Bkg) @ A
-                gg = A.T @ D(Bgg) @ A
+                kk = S(Ed, Bqq, Ed) + S(Ed, Bqk, A) + S(A, Bqk, Ed) + S(A, Bkk, A)
+                kg = S(Ed, Bqg, A) + S(A, Bkg, A)
+                gg = S(A, Bgg, A)
             else:
-                kk = A.T @ D(w * ge * fkk) @ A
-                kg = A.T @ D(w * fk) @ A
+                kk = S(A, w * ge * fkk, A)
+                kg = S(A, w * fk, A)
                 gg = zero
             if grid.sparse:
                 H = sp.bmat([[kk, kg], [kg.T, gg]], format="csr")
