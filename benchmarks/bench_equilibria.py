@@ -12,8 +12,9 @@ import time
 
 import numpy as np
 
-from qsa.equilibria import heteroclinic, npulse
+from qsa.equilibria import heteroclinic, npulse, splice, splice_polygon
 from qsa.equilibria.orbit import orbit_with_turning
+from qsa.equilibria.splice import polygon_positions
 
 
 def best_of(f, *args, repeat=3, **kwargs):
@@ -55,6 +56,23 @@ def main():
         def d2W(self, k):
             h = 1e-4
             return (self.W(k + h) - 2 * self.W(k) + self.W(k - h)) / h**2
+
+    print("\nsplices (closure tol 1e-12):")
+    print(f"{'shape':>22} {'alpha':>6} {'grid':>6} {'time [ms]':>10} {'steps':>6} {'|C|':>9} "
+          f"{'max|R_k|':>9}")
+    rng = np.random.default_rng(0)
+    for name, n, alpha in [("triangle", 3, 0.1), ("square", 4, 0.05), ("hexagon", 6, 0.05)]:
+        angles, facets = [2 * np.pi / n] * n, list(1.0 + 0.2 * rng.random(n))
+        t, eq = best_of(splice_polygon, angles, facets, alpha, kstar=kstar)
+        print(f"{name + ' (polygon)':>22} {alpha:>6.2f} {eq.curve.N:>6} {1e3 * t:>10.1f} "
+              f"{eq.extra['iterations']:>6} {eq.closure:>9.1e} "
+              f"{np.max(np.abs(eq.extra['R_kappa'])):>9.1e}")
+        p, L = polygon_positions(angles, facets, kstar)
+        p = p + 0.02 * rng.standard_normal(p.size)
+        t, eq = best_of(splice, p, alpha, length=L, kstar=kstar)
+        print(f"{name + ' (perturbed p)':>22} {alpha:>6.2f} {eq.curve.N:>6} {1e3 * t:>10.1f} "
+              f"{eq.extra['iterations']:>6} {eq.closure:>9.1e} "
+              f"{np.max(np.abs(eq.extra['R_kappa'])):>9.1e}")
 
     s = np.linspace(-1, 1, 10_000)
     t_build, front = best_of(heteroclinic, 0.1, Sextic())
