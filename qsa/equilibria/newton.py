@@ -346,13 +346,19 @@ class EquilibriumSystem:
             parts.append([self.phase @ x[:N] - self.phase_value])
         return np.concatenate(parts)
 
-    def scaled_norm(self, F, c: Curve, scale: float) -> float:
-        """``max(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``."""
+    def scaled_parts(self, F, c: Curve, scale: float) -> np.ndarray:
+        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,)."""
         N = self.N
-        r = max(np.max(np.abs(F[:N])) / scale, np.linalg.norm(F[N:N + 3]) / c.length())
+        out = np.zeros(3)
+        out[0] = np.max(np.abs(F[:N])) / scale
+        out[1] = np.linalg.norm(F[N:N + 3]) / c.length()
         if self.phase is not None:
-            r = max(r, abs(F[N + 3]) / max(np.max(np.abs(c.kappa)), 1.0))
-        return float(r)
+            out[2] = abs(F[N + 3]) / max(np.max(np.abs(c.kappa)), 1.0)
+        return out
+
+    def scaled_norm(self, F, c: Curve, scale: float) -> float:
+        """``max`` of :meth:`scaled_parts`: the relative residual of the square system."""
+        return float(np.max(self.scaled_parts(F, c, scale)))
 
     def jacobian_parts(self, x, energy=None):
         """Blocks of ``dF/dx``: the ``N x N`` block ``A`` and dense borders.
@@ -496,7 +502,13 @@ def _noise_floor(system, x, scale, energy=None, seed=0):
     F0 = system.residual(x, energy)
     x1 = x * (1 + _EPS * rng.choice([-1.0, 1.0], size=x.size))
     F1 = system.residual(x1, energy)
-    return system.scaled_norm(F1 - F0, system.curve(x), scale)
+    return system.scaled_parts(F1 - F0, system.curve(x), scale)
+
+
+def _at_floor(system, x, F, scale, tol, floor):
+    """Every part of the residual is below ``max(tol, 100 x its round-off floor)``."""
+    parts = system.scaled_parts(F, system.curve(x), scale)
+    return bool(np.all(parts <= np.maximum(tol, 100 * floor)))
 
 
 def _check_curve(energy, curve):
@@ -580,23 +592,23 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
         if not accepted:
             # At the round-off floor no step can decrease the residual any more.
             floor = _noise_floor(system, x, scale, energy)
-            status = 1 if r <= max(tol, 100 * floor) else 4
+            status = 1 if _at_floor(system, x, F, scale, tol, floor) else 4
             break
         x, F, r = xt, Ft, rt
         history.append(r)
         if r < best[0]:
             best = (r, x.copy())
-        # Stagnation at the round-off floor: a full step that no longer gains much.
-        if len(history) >= 3 and r > 0.5 * history[-2] and t == 1.0:
+        # Stagnation at the round-off floor: a step that no longer gains much.
+        if len(history) >= 3 and r > 0.5 * history[-2]:
             floor = _noise_floor(system, x, scale, energy)
-            if r <= 100 * floor:
+            if _at_floor(system, x, F, scale, tol, floor):
                 status = 1 if r > tol else 0
                 break
     if best[0] < r:
         x, r = best[1], best[0]
     if floor is None:
         floor = _noise_floor(system, x, scale, energy)
-    return x, status, np.array(history), n_iter, floor
+    return x, status, np.array(history), n_iter, float(np.max(floor))
 
 
 def _params(energy, curve, Lambda):
