@@ -28,7 +28,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from qsa.curve import Curve
 from qsa.equilibria.newton import (
@@ -40,7 +39,6 @@ from qsa.equilibria.newton import (
     _Factor,
     _result,
     newton_solve,
-    normal_velocity,
     residual_scale,
 )
 

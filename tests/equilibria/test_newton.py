@@ -200,3 +200,21 @@ def test_summary_is_json_ready():
     r = polish(eq.energy, eq.curve)
     d = json.loads(json.dumps(r.summary()))
     assert d["status"] == 0 and d["kind"] == "polished" and len(d["history"]) == r.n_iter + 1
+
+
+def test_cli_polish_option(capsys):
+    import argparse
+    import json
+
+    from qsa.commands import equilibrium
+
+    parser = argparse.ArgumentParser(prog="qsa")
+    equilibrium.add_parser(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["equilibrium", "splice", "--angles", "90", "90", "90", "90",
+                              "--facets", "1", "1", "1", "1", "--alpha", "0.2", "--N", "255",
+                              "--polish", "--json"])
+    assert args.func(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["kind"] == "polished" and out["success"] and out["status"] == 0
+    assert out["residual"] <= 1e-10 * out["residual_scale"] and out["closure"] < 1e-12
+    assert out["params"]["d_min"] > 0  # construction parameters are kept
