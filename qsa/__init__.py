@@ -6,6 +6,7 @@ formulas are cited in each module (``# NOTE:`` marks a departure from the paper)
 
 Examples
 --------
+>>> import numpy as np
 >>> from qsa import Curve, Fourier
 >>> from qsa.energies import Faceting, Perimeter
 >>> c = Curve.polar(lambda t: 1 + 0.2 * np.cos(3 * t), Fourier(65))

@@ -184,19 +184,31 @@ class FiniteDifference(Grid):
         rows = np.arange(N)
         return sp.csr_matrix((np.ones(N), (rows, (rows + k) % N)), shape=(N, N))
 
+    # The operators depend only on N and are cached on the (immutable) grid; treat the
+    # returned matrices as read-only.
+    @cached_property
+    def _ops(self):
+        S1, Sm1, I = self._shift(1), self._shift(-1), self.identity()
+        return {
+            "d1": ((S1 - Sm1) * (0.5 * self.N)).tocsr(),
+            "d2": ((S1 - 2 * I + Sm1) * self.N**2).tocsr(),
+            "edge_diff": ((S1 - I) * self.N).tocsr(),
+            "edge_avg": ((S1 + I) * 0.5).tocsr(),
+        }
+
     def derivative(self):
-        return ((self._shift(1) - self._shift(-1)) * (0.5 * self.N)).tocsr()
+        return self._ops["d1"]
 
     def second_derivative(self):
-        return ((self._shift(1) - 2 * self.identity() + self._shift(-1)) * self.N**2).tocsr()
+        return self._ops["d2"]
 
     def edge_difference(self):
         """Forward difference to the midpoints: ``(f_{j+1} - f_j) / h``."""
-        return ((self._shift(1) - self.identity()) * self.N).tocsr()
+        return self._ops["edge_diff"]
 
     def edge_average(self):
         """Midpoint average ``(f_j + f_{j+1}) / 2``."""
-        return ((self._shift(1) + self.identity()) * 0.5).tocsr()
+        return self._ops["edge_avg"]
 
     def cumulative(self, f):
         f = np.asarray(_as_values(f, self.N), dtype=float)

@@ -32,6 +32,7 @@ __all__ = [
     "grad_s",
     "laplace_s",
     "helmholtz",
+    "apply_laplace_s",
     "M",
     "M_adjoint",
     "MMdagger",
@@ -63,6 +64,14 @@ def laplace_s(c: Curve):
     E = grid.edge_difference()
     ge = grid.edge_average() @ c.g
     return -(grid.diag(1.0 / c.g) @ (E.T @ (grid.diag(1.0 / ge) @ E)))
+
+
+def apply_laplace_s(c: Curve, f) -> np.ndarray:
+    """``Delta_s f`` without forming the matrix (three sparse/dense products), shape (N,)."""
+    grid = c.grid
+    E = grid.edge_difference()
+    ge = grid.edge_average() @ c.g
+    return -(E.T @ ((E @ f) / ge)) / c.g
 
 
 def helmholtz(c: Curve):

@@ -186,26 +186,41 @@ def equal_arclength_parameters(curve: PeriodicInterpolant, N: int, tol=1e-14, ma
 
 
 def _equal_chord(curve, t, maxiter=30, tol=1e-13):
-    """Newton for equal chords: unknowns t_1..t_{N-1} and c (chord length), t_0 = 0."""
+    """Newton for equal chords: unknowns t_1..t_{N-1} and c (chord length), t_0 = 0.
+
+    The Jacobian is cyclic bidiagonal plus one dense column (the chord length), so
+    each step is a sparse solve, O(N). Stops at ``max |F| <= tol c^2`` or when the
+    Newton steps stall at round-off.
+    """
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
     N = t.size
     z = curve.derivative(t)
     c = np.mean(np.abs(np.roll(z, -1) - z))
+    rows = np.arange(N)
+    best = np.inf
     for _ in range(maxiter):
         z = curve.derivative(t)
         dz = curve.derivative(t, 1)
         d = np.roll(z, -1) - z  # chord j: from node j to node j+1
         F = np.abs(d) ** 2 - c**2
-        if np.max(np.abs(F)) <= tol * c**2:
+        err = np.max(np.abs(F))
+        if err <= tol * c**2:
             return t
+        if err >= 0.5 * best and best <= 1e3 * np.finfo(float).eps * c**2 * N:
+            return t  # stalled at round-off
+        best = min(best, err)
         # dF_j/dt_j = -2 Re(conj(d_j) dz_j); dF_j/dt_{j+1} = 2 Re(conj(d_j) dz_{j+1}); dF/dc = -2c
         a = -2 * np.real(np.conj(d) * dz)
         b = 2 * np.real(np.conj(d) * np.roll(dz, -1))
-        J = np.zeros((N, N))
-        rows = np.arange(N)
-        J[rows, rows] += a
-        J[rows, (rows + 1) % N] += b
-        J[:, 0] = -2 * c  # column 0 is the chord length (t_0 stays 0)
-        delta = np.linalg.solve(J, -F)
+        r = np.concatenate([rows, rows, rows])
+        col = np.concatenate([rows, (rows + 1) % N, np.zeros(N, dtype=int)])
+        val = np.concatenate([a, b, np.full(N, -2 * c)])
+        keep = col != 0  # column 0 holds the chord length, not t_0 (fixed at 0)
+        keep[2 * N :] = True
+        J = sp.csc_matrix((val[keep], (r[keep], col[keep])), shape=(N, N))
+        delta = spla.spsolve(J, -F)
         c += delta[0]
         t = t.copy()
         t[1:] += delta[1:]

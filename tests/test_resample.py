@@ -42,3 +42,11 @@ def test_bad_samples(case):
         y = y[:-1]
     with pytest.raises(ValueError):
         resample_closed(x, y, 32)
+
+
+def test_equal_chord_large_N():
+    """Sparse Newton: equal chords to round-off for thousands of points."""
+    x, y = ellipse(300)
+    X, Y, _ = resample_closed(x, y, 5000, method="chord")
+    ch = np.hypot(np.diff(np.append(X, X[0])), np.diff(np.append(Y, Y[0])))
+    assert np.ptp(ch) < 1e-10 * ch.mean()

@@ -4,12 +4,15 @@ Each energy provides ``energy``, ``gradient`` (nabla_I E in <f,h> = int f h dsig
 ``normal_velocity`` (outward V^n) and ``hessian`` (nabla_I^2 E); energies add with ``+``.
 """
 
+from qsa.energies.adhesion import Adhesion, AdhesionKernel
 from qsa.energies.base import Energy, EnergySum, Perimeter
 from qsa.energies.faceting import DoubleWell, Faceting, Well
 from qsa.energies.helfrich import CanhamHelfrich
 from qsa.energies.local import Density, FirstOrderEnergy, LocalEnergy
 
 __all__ = [
+    "Adhesion",
+    "AdhesionKernel",
     "Energy",
     "EnergySum",
     "Perimeter",

@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from qsa.curve import Curve
 from qsa.energies.base import Energy, _check_param
@@ -120,38 +121,31 @@ class LocalEnergy(Energy):
     def euclidean_hessian(self, c):
         """Second partial derivatives of the discrete energy, shape (2N, 2N), symmetric."""
         grid = c.grid
-        N = c.N
+        D = grid.diag
+        zero = sp.csr_matrix((c.N, c.N)) if grid.sparse else np.zeros((c.N, c.N))
         total = None
         for t in self.densities():
             Ed, A, w, ge, ke, p = _maps(c, t)
-            f = _as_array(t.f(p, ke), ke)
             fk = _as_array(t.f_k(p, ke), ke)
             fkk = _as_array(t.f_kk(p, ke), ke)
-            D = grid.diag
-            Z = None
             if t.uses_p:
                 fpp = _as_array(t.f_pp(p, ke), ke)
                 fpk = _as_array(t.f_pk(p, ke), ke)
-                # Phi = g_e f(q/g_e, k_e); second derivatives in (q, k_e, g_e):
+                # Phi = g_e f(q/g_e, k_e); its second derivatives in (q, k_e, g_e):
                 Bqq, Bqk, Bqg = w * fpp / ge, w * fpk, -w * p * fpp / ge
                 Bkk, Bkg, Bgg = w * ge * fkk, w * (fk - p * fpk), w * p**2 * fpp / ge
-                T = [Ed, A]
-                kk = (T[0].T @ D(Bqq) @ T[0] + T[0].T @ D(Bqk) @ T[1]
-                      + T[1].T @ D(Bqk) @ T[0] + T[1].T @ D(Bkk) @ T[1])
-                kg = T[0].T @ D(Bqg) @ A + T[1].T @ D(Bkg) @ A
+                kk = (Ed.T @ D(Bqq) @ Ed + Ed.T @ D(Bqk) @ A + A.T @ D(Bqk) @ Ed
+                      + A.T @ D(Bkk) @ A)
+                kg = Ed.T @ D(Bqg) @ A + A.T @ D(Bkg) @ A
                 gg = A.T @ D(Bgg) @ A
             else:
                 kk = A.T @ D(w * ge * fkk) @ A
                 kg = A.T @ D(w * fk) @ A
-                gg = Z
-            blocks = [[kk, kg], [kg.T, gg]]
+                gg = zero
             if grid.sparse:
-                import scipy.sparse as sp
-
-                H = sp.bmat(blocks, format="csr", dtype=float) if gg is not None else \
-                    sp.bmat([[kk, kg], [kg.T, sp.csr_matrix((N, N))]], format="csr")
+                H = sp.bmat([[kk, kg], [kg.T, gg]], format="csr")
             else:
-                H = np.block([[kk, kg], [kg.T, gg if gg is not None else np.zeros((N, N))]])
+                H = np.block([[kk, kg], [kg.T, gg]])
             total = H if total is None else total + H
         return total
 
@@ -161,8 +155,6 @@ class LocalEnergy(Energy):
         winv = 1.0 / np.concatenate([ds, ds])
         H = self.euclidean_hessian(c)
         if c.grid.sparse:
-            import scipy.sparse as sp
-
             return (sp.diags(winv) @ H).tocsr()
         return H * winv[:, None]
 

@@ -94,3 +94,4 @@ class FlowModel(ABC):
 
     def check_resolution(self, x, y) -> None:
         """Raise ``ValueError`` when the grid is too coarse for the model (e.g. h > l_star)."""
+        return None

@@ -1,0 +1,125 @@
+"""Cost of one residual + one Newton-matrix assembly of the DAE models against N.
+
+Prints a table per model and the exponent p of a least-squares fit
+``time ~ N^p`` (targets of issue 5: p <= 1.15 for faceting, p <= 1.3 for CHA
+with the neighbour list).
+
+For CHA the kernel width is tied to the grid (``l* = 2 L/N``), so every node
+has the same number of neighbours: this measures the algorithm, not a change of
+physics. A second CHA table keeps the paper's folding kernel fixed
+(``l* = 0.01``, Table T1) over the resolved range: there the neighbours per
+node grow like N until the kernel is resolved by many nodes, and the cost with
+them. The last table is the paper's long-range kernel (``l* = 1/2``), whose
+adhesion block is dense.
+
+Run: ``python benchmarks/bench_dae_models.py [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from qsa.flows.dae import CHA, FacetingFlow, equalize_chords
+from qsa.resample import resample_closed
+
+
+def wobbly(N, folds=13, depth=0.08):
+    th = 2 * np.pi * np.arange(4096) / 4096
+    r = 1 + depth * np.cos(folds * th) + 0.03 * np.sin(2 * th)
+    # equal arc length, then the models' own projection to equal chords (setup does it)
+    x, y, _ = resample_closed(1.2 * r * np.cos(th), 1.2 * r * np.sin(th), N)
+    x, y, L = equalize_chords(x, y)
+    return x, y, L
+
+
+def time_assembly(sys, repeats):
+    rng = np.random.default_rng(0)
+    y = sys.y0 * (1 + 1e-6 * rng.standard_normal(sys.size))
+    ydot = 1e-3 * rng.standard_normal(sys.size)
+    best = np.inf
+    for _ in range(repeats):
+        # CPU time of this process: steadier than wall time on a shared machine
+        # (the kernels are single-threaded NumPy/SciPy)
+        t0 = time.process_time()
+        sys.residual(y, ydot)
+        J = sys.jacobian(y, ydot, 1e3)
+        best = min(best, time.process_time() - t0)
+    return best, J.nnz
+
+
+def run(title, Ns, make_model, repeats, target=None):
+    print(f"\n{title}")
+    print(f"{'N':>8} {'unknowns':>9} {'nnz(J)':>10} {'nnz/N':>7} {'cpu [ms]':>10} {'us/node':>8}")
+    times = []
+    for N in Ns:
+        x, y, L = wobbly(N)
+        sys = make_model(N, L).setup(x, y)
+        t, nnz = time_assembly(sys, repeats)
+        times.append(t)
+        print(f"{N:>8} {sys.size:>9} {nnz:>10} {nnz / N:>7.1f} {1e3 * t:>10.2f} "
+              f"{1e6 * t / N:>8.2f}")
+    p = np.polyfit(np.log(Ns), np.log(times), 1)[0]
+    verdict = ""
+    if target is not None:
+        verdict = f"  (target <= {target:.2f}: {'ok' if p <= target else 'MISSED'})"
+    print(f"fitted exponent p = {p:.3f}{verdict}")
+    if len(Ns) >= 5:  # small N is dominated by fixed per-call overhead
+        q = np.polyfit(np.log(Ns[-3:]), np.log(times[-3:]), 1)[0]
+        print(f"exponent over the three largest N: {q:.3f}")
+    return p
+
+
+def newton_solve_table(Ns, steps=(1e-4, 1e-3, 1e-2)):
+    """One Newton solve with the long-range kernel: full sparse LU vs local LU + GMRES."""
+    import scipy.sparse.linalg as spla
+
+    print("\nCHA l* = 1/2: one Newton-matrix solve, full sparse LU vs LU(J_local) + GMRES")
+    print(f"{'N':>6} {'k':>8} {'LU(J) [ms]':>11} {'LU(J_loc)+GMRES [ms]':>21} {'its':>4} "
+          f"{'ratio':>6}")
+    model = CHA(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
+    for N in Ns:
+        x, y, _ = wobbly(N)
+        sys = model.setup(x, y)
+        b = np.random.default_rng(0).standard_normal(sys.size)
+        for k in steps:
+            J = sys.jacobian(sys.y0, np.zeros(sys.size), 1 / k)
+            Jl, _ = sys.jacobian_parts(sys.y0, np.zeros(sys.size), 1 / k)
+            t0 = time.process_time()
+            spla.splu(J).solve(b)
+            t_full = time.process_time() - t0
+            t0 = time.process_time()
+            lu = spla.splu(Jl)
+            its = []
+            spla.gmres(J, b, M=spla.LinearOperator(J.shape, lu.solve), rtol=1e-12, restart=80,
+                       maxiter=10, callback=its.append, callback_type="pr_norm")
+            t_gm = time.process_time() - t0
+            print(f"{N:>6} {k:>8.0e} {1e3 * t_full:>11.2f} {1e3 * t_gm:>21.2f} {len(its):>4} "
+                  f"{t_full / t_gm:>6.1f}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="smaller sweeps")
+    args = ap.parse_args(argv)
+    rep = 3 if args.quick else 5
+    facet_N = [100, 300, 1000, 3000, 10000] + ([] if args.quick else [30000, 100000])
+    cha_N = [100, 300, 1000, 3000] + ([] if args.quick else [10000])
+    run("FacetingFlow(alpha=0.1, kstar=5, beta=5, L_star=8)", facet_N,
+        lambda N, L: FacetingFlow(alpha=0.1, kstar=5.0, beta=5.0, L_star=8.0), rep, 1.15)
+    run("CHA, neighbour list, l* = 2 L/N (fixed neighbours per node)", cha_N,
+        lambda N, L: CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=2 * L / N, a=1.0),
+        rep, 1.3)
+    fixed_N = [1000, 2000, 4000] if args.quick else [1000, 2000, 4000, 8000]
+    run("CHA, neighbour list, paper's folding kernel l* = 0.01 (Table T1)", fixed_N,
+        lambda N, L: CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=0.01, a=1.0), rep)
+    run("CHA, paper's convergence-study kernel l* = 1/2 (dense adhesion block)",
+        [100, 200, 400, 800],
+        lambda N, L: CHA(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0), rep)
+    newton_solve_table([100, 400] if args.quick else [100, 200, 400, 800])
+
+
+if __name__ == "__main__":
+    main()

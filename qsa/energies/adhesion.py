@@ -1,0 +1,605 @@
+"""The adhesion-repulsion two-point kernel and its discrete fields (kernel level).
+
+The two-point energy of the paper (e:AdhE) is
+
+    E_A = int_S int_S A(|d(s, s~)|^2) dsigma_s dsigma_s~,   d = gamma(s) - gamma(s~),
+
+with the Lennard-Jones type kernel (e:LJ)
+
+    A(l) = A0 (1 - l / (a^2 l*^2)) exp(-l / l*^2),   l = |d|^2.
+
+Its L^2(dsigma) extrinsic gradient is (A.n + kappa B, 0) (e:Adh-Ex_grad) with the
+two-point force and the surface density
+
+    A(s) = 4 int A'(|d|^2) d dsigma_s~,     B(s) = 2 int A(|d|^2) dsigma_s~,
+
+so the normal velocity is V^n_A = -(A.n + kappa B) (e:Adh-NV).
+
+This module holds the *node-level* pieces: the kernel and its derivatives, the
+neighbour lists (all pairs closer than a cutoff beyond which the kernel is
+below ``rel * A0``), the discrete energy with node quadrature weights ``w``
+(trapezoid rule on the periodic grid: ``w_j = g_j / N``, ``= L / N`` at scaled
+arc length), the fields ``B`` and ``A`` (called ``force`` in code) and their
+derivatives with respect to the node positions. Everything is vectorised over
+pairs; with a neighbour list the cost is O(N + number of pairs).
+
+The discrete energy (the quadrature of the paper's code, trapezoid in both
+variables, the diagonal ``i = j`` included) is
+
+    E_A = sum_i sum_j A(|X_i - X_j|^2) w_i w_j,
+
+and the fields are exactly its partial derivatives:
+``dE_A / dX_i = w_i force_i`` and ``B_i = 2 sum_j A(l_ij) w_j``.
+
+Notes
+-----
+MATH.md section 3 (kernel and its derivative) and section 6 (rigid-invariance
+identities). The printed closed forms for the near-contact force and ``B(0)``
+are off by factors 8 and 4 (MATH.md section 6); nothing here uses them.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import brentq
+from scipy.spatial import cKDTree
+
+from qsa.energies.base import Energy
+
+__all__ = [
+    "AdhesionKernel",
+    "pair_list",
+    "dense_pairs",
+    "adhesion_pairs",
+    "adhesion_energy",
+    "adhesion_fields",
+    "adhesion_normal_velocity",
+    "uniform_weight_fields",
+    "PairDerivatives",
+    "adhesion_pair_derivatives",
+    "adhesion_field_jacobians",
+    "Adhesion",
+]
+
+
+def _positive(value, name):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a positive number, got {value!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise ValueError(f"{name} must be positive and finite, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class AdhesionKernel:
+    """Adhesion-repulsion kernel ``A(l) = A0 (1 - l/(a^2 l*^2)) exp(-l/l*^2)`` (e:LJ).
+
+    Parameters
+    ----------
+    A0 : float
+        Strength, ``A(0) = A0 > 0``.
+    l_star : float
+        Screening length ``l* > 0``.
+    a : float
+        Shape parameter ``a > 0``: ``A < 0`` for ``|d| > a l*``; the minimum is
+        at ``|d| = l* sqrt(1 + a^2)`` with value ``-A0 a^-2 exp(-1 - a^2)``.
+
+    Notes
+    -----
+    The argument ``l`` is the *squared* distance ``|d|^2``; ``dA`` and ``d2A``
+    are derivatives with respect to ``l`` (MATH.md section 3).
+
+    Examples
+    --------
+    >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+    >>> float(k.A(0.0))
+    10.0
+    >>> bool(5.5 < k.cutoff_distance() / k.l_star < 7.5)
+    True
+    """
+
+    A0: float
+    l_star: float
+    a: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "A0", _positive(self.A0, "A0"))
+        object.__setattr__(self, "l_star", _positive(self.l_star, "l_star"))
+        object.__setattr__(self, "a", _positive(self.a, "a"))
+
+    # ------------------------------------------------------------ the kernel
+    def A(self, l):
+        """Kernel value ``A(l)``, ``l = |d|^2`` (any shape)."""
+        s = self.l_star**2
+        l = np.asarray(l, dtype=float)
+        return self.A0 * (1.0 - l / (self.a**2 * s)) * np.exp(-l / s)
+
+    def dA(self, l):
+        """``A'(l) = A0 (l/(a^2 l*^4) - (1 + a^2)/(a^2 l*^2)) exp(-l/l*^2)``."""
+        s = self.l_star**2
+        c = self.a**2 * s
+        l = np.asarray(l, dtype=float)
+        return self.A0 * (l / (c * s) - 1.0 / c - 1.0 / s) * np.exp(-l / s)
+
+    def d2A(self, l):
+        """``A''(l) = A0 (2/(c s) + 1/s^2 - l/(c s^2)) exp(-l/s)``, ``s = l*^2, c = a^2 s``."""
+        s = self.l_star**2
+        c = self.a**2 * s
+        l = np.asarray(l, dtype=float)
+        return self.A0 * (2.0 / (c * s) + 1.0 / s**2 - l / (c * s**2)) * np.exp(-l / s)
+
+    def __call__(self, l):
+        return self.A(l)
+
+    def derivatives(self, l, order=2):
+        """``(A, A', A'')`` (``order=2``) or ``(A, A')`` (``order=1``) with one exponential."""
+        s = self.l_star**2
+        c = self.a**2 * s
+        l = np.asarray(l, dtype=float)
+        e = self.A0 * np.exp(-l / s)
+        A = (1.0 - l / c) * e
+        dA = (l / (c * s) - 1.0 / c - 1.0 / s) * e
+        if order == 1:
+            return A, dA
+        return A, dA, (2.0 / (c * s) + 1.0 / s**2 - l / (c * s**2)) * e
+
+    # --------------------------------------------------------------- scales
+    @property
+    def minimum_distance(self) -> float:
+        """Distance ``l* sqrt(1 + a^2)`` at which ``A`` is minimal."""
+        return self.l_star * math.sqrt(1.0 + self.a**2)
+
+    @property
+    def pair_separation(self) -> float:
+        """Optimal separation of two parallel strands, ``l* sqrt(a^2 + 1/2)`` (MATH.md 6)."""
+        return self.l_star * math.sqrt(self.a**2 + 0.5)
+
+    def cutoff_distance(self, rel=1e-16) -> float:
+        """Distance beyond which ``|A| <= rel A0`` and ``|A'| <= rel A0``.
+
+        Both bounds hold for every larger distance (the tails are monotone there).
+        With ``rel = 1e-16`` this is about 6.3-7 ``l*`` (``A'`` carries a factor
+        ``1/l*^2``, so small ``l*`` needs a slightly wider cutoff).
+
+        Parameters
+        ----------
+        rel : float
+            Relative threshold, ``0 < rel < 1``.
+
+        Returns
+        -------
+        float
+            The cutoff distance ``|d|`` (not squared).
+        """
+        rel = float(rel)
+        if not (0.0 < rel < 1.0):
+            raise ValueError(f"rel must lie in (0, 1), got {rel!r}")
+        a2 = self.a**2
+        s = self.l_star**2
+
+        # u = l / l*^2; both |A|/A0 and |A'|/A0 are decreasing for u > 2 + a^2.
+        def log_excess(u):
+            fa = abs(1.0 - u / a2)
+            fd = abs(u - 1.0 - a2) / (a2 * s)
+            return math.log(max(fa, fd)) - u - math.log(rel)
+
+        u0 = 2.0 + a2
+        if log_excess(u0) <= 0.0:
+            return self.l_star * math.sqrt(u0)
+        u1 = 2.0 * u0
+        while log_excess(u1) > 0.0:
+            u1 *= 2.0
+        u = brentq(log_excess, u0, u1, xtol=1e-12, rtol=1e-14)
+        return self.l_star * math.sqrt(u)
+
+
+# ---------------------------------------------------------------- pair lists
+def _check_positions(x, y):
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.ndim != 1 or x.shape != y.shape:
+        raise ValueError(f"x and y must be 1-d of equal length, got {x.shape} and {y.shape}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise ValueError("positions x, y contain NaN or inf")
+    return x, y
+
+
+def pair_list(x, y, cutoff):
+    """All node pairs closer than ``cutoff`` (k-d tree), as index arrays with ``i < j``.
+
+    Parameters
+    ----------
+    x, y : array_like, shape (N,)
+        Node positions.
+    cutoff : float
+        Distance; pairs with ``|X_i - X_j| <= cutoff`` are returned.
+
+    Returns
+    -------
+    i, j : ndarray of intp, shape (P,)
+        Pair indices, ``i < j``, sorted lexicographically. Each unordered pair
+        appears once; use both orientations for symmetric sums.
+    """
+    x, y = _check_positions(x, y)
+    cutoff = _positive(cutoff, "cutoff")
+    if x.size > 1:
+        diameter = np.hypot(np.ptp(x), np.ptp(y))
+        if diameter < cutoff:
+            return dense_pairs(x.size)  # every pair is within the cutoff (long-range kernel)
+        if cutoff > 0.25 * diameter and x.size <= 4000:
+            # a large share of all pairs is within reach: filtering them is cheaper than a tree
+            i, j = dense_pairs(x.size)
+            keep = (x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2 <= cutoff * cutoff
+            return i[keep], j[keep]
+    tree = cKDTree(np.column_stack([x, y]))
+    pairs = tree.query_pairs(cutoff, output_type="ndarray")
+    if pairs.size == 0:
+        empty = np.zeros(0, dtype=np.intp)
+        return empty, empty.copy()
+    i = np.minimum(pairs[:, 0], pairs[:, 1]).astype(np.intp)
+    j = np.maximum(pairs[:, 0], pairs[:, 1]).astype(np.intp)
+    order = np.lexsort((j, i))
+    return i[order], j[order]
+
+
+def dense_pairs(N):
+    """All pairs ``i < j`` of ``N`` nodes (the exact path, ``N (N-1)/2`` pairs).
+
+    The arrays are cached per ``N`` and read-only (they depend on ``N`` alone).
+    """
+    return _dense_pairs(int(N))
+
+
+@functools.lru_cache(maxsize=8)
+def _dense_pairs(N):
+    i, j = np.triu_indices(N, k=1)
+    i = i.astype(np.intp)
+    j = j.astype(np.intp)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
+
+
+def adhesion_pairs(kernel, x, y, *, method="neighbours", rel=1e-16):
+    """Pairs entering the adhesion sums: a cutoff neighbour list or all pairs.
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : array_like, shape (N,)
+    method : {"neighbours", "dense"}
+        ``"neighbours"``: pairs within ``kernel.cutoff_distance(rel)``;
+        ``"dense"``: every pair (exact, O(N^2)).
+    rel : float
+        Cutoff threshold passed to :meth:`AdhesionKernel.cutoff_distance`.
+    """
+    if method == "neighbours":
+        return pair_list(x, y, kernel.cutoff_distance(rel))
+    if method == "dense":
+        x, _ = _check_positions(x, y)
+        return dense_pairs(x.size)
+    raise ValueError(f"method must be 'neighbours' or 'dense', got {method!r}")
+
+
+def _weights(w, N):
+    w = np.asarray(w, dtype=float)
+    if w.ndim == 0:
+        w = np.full(N, float(w))
+    if w.shape != (N,):
+        raise ValueError(f"w must be a scalar or have shape ({N},), got {w.shape}")
+    return w
+
+
+def _resolve_pairs(kernel, x, y, pairs, method):
+    if pairs is None:
+        return adhesion_pairs(kernel, x, y, method=method)
+    i, j = pairs
+    return np.asarray(i, dtype=np.intp), np.asarray(j, dtype=np.intp)
+
+
+# ------------------------------------------------------------ energy, fields
+def adhesion_energy(kernel, x, y, w, *, pairs=None, method="neighbours"):
+    """Discrete two-point energy ``E_A = sum_i sum_j A(|X_i - X_j|^2) w_i w_j`` (e:AdhE).
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : array_like, shape (N,)
+        Node positions.
+    w : float or array_like, shape (N,)
+        Node quadrature weights of dsigma (``L / N`` at scaled arc length).
+    pairs : tuple of ndarray, optional
+        ``(i, j)`` with ``i < j`` from :func:`pair_list` / :func:`dense_pairs`;
+        computed by ``method`` when omitted.
+    method : {"neighbours", "dense"}
+
+    Returns
+    -------
+    float
+    """
+    x, y = _check_positions(x, y)
+    w = _weights(w, x.size)
+    i, j = _resolve_pairs(kernel, x, y, pairs, method)
+    l = (x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2
+    return float(kernel.A0 * np.sum(w * w) + 2.0 * np.sum(kernel.A(l) * w[i] * w[j]))
+
+
+def adhesion_fields(kernel, x, y, w, *, pairs=None, method="neighbours"):
+    """The fields ``B`` and ``force`` (the paper's 𝔸) at the nodes.
+
+    ``B_i = 2 sum_j A(l_ij) w_j`` and ``force_i = 4 sum_j A'(l_ij) (X_i - X_j) w_j``,
+    ``l_ij = |X_i - X_j|^2`` (trapezoid quadrature of e:Adh-NV's integrals, the
+    diagonal included: it adds ``2 A0 w_i`` to ``B_i`` and nothing to the force).
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : array_like, shape (N,)
+    w : float or array_like, shape (N,)
+        Node quadrature weights of dsigma.
+    pairs, method
+        As in :func:`adhesion_energy`.
+
+    Returns
+    -------
+    B : ndarray, shape (N,)
+    force : ndarray, shape (N, 2)
+        The two-point force 𝔸; ``dE_A/dX_i = w_i force_i``. The adhesion normal
+        velocity is ``-(force . n + kappa B)`` (e:Adh-NV).
+    """
+    x, y = _check_positions(x, y)
+    N = x.size
+    w = _weights(w, N)
+    i, j = _resolve_pairs(kernel, x, y, pairs, method)
+    if np.all(w == w[0]):  # uniform weights (scaled arc length): fewer gathers
+        return uniform_weight_fields(kernel, x, y, w[0], i, j)
+    dx = x[i] - x[j]
+    dy = y[i] - y[j]
+    Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
+    B = 2.0 * kernel.A0 * w
+    B = B + 2.0 * (np.bincount(i, Av * w[j], N) + np.bincount(j, Av * w[i], N))
+    fx = 4.0 * (np.bincount(i, dAv * dx * w[j], N) - np.bincount(j, dAv * dx * w[i], N))
+    fy = 4.0 * (np.bincount(i, dAv * dy * w[j], N) - np.bincount(j, dAv * dy * w[i], N))
+    return B, np.column_stack([fx, fy])
+
+
+def uniform_weight_fields(kernel, x, y, w, i, j):
+    """``(B, force)`` of :func:`adhesion_fields` for one scalar weight ``w`` (no input checks).
+
+    The inner loop of the flow models: ``x, y`` must be finite float arrays of
+    shape (N,) and ``(i, j)`` a pair list with ``i < j``.
+    """
+    N = x.size
+    dx = x[i] - x[j]
+    dy = y[i] - y[j]
+    Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
+    B = 2.0 * w * (kernel.A0 + np.bincount(i, Av, N) + np.bincount(j, Av, N))
+    gx = dAv * dx
+    gy = dAv * dy
+    force = np.empty((N, 2))
+    force[:, 0] = 4.0 * w * (np.bincount(i, gx, N) - np.bincount(j, gx, N))
+    force[:, 1] = 4.0 * w * (np.bincount(i, gy, N) - np.bincount(j, gy, N))
+    return B, force
+
+
+def adhesion_normal_velocity(kernel, x, y, nx, ny, kappa, w, *, pairs=None,
+                             method="neighbours"):
+    """Two-point normal velocity ``V^n_A = -(force . n + kappa B)`` (e:Adh-NV).
+
+    ``(force . n + kappa B, 0)`` is the extrinsic L^2(dsigma) gradient
+    (e:Adh-Ex_grad); rigid invariance makes it orthogonal to the rigid normal
+    velocities ``e_k . n`` and ``gamma . tau`` in ``<f, h> = int f h dsigma``
+    (MATH.md section 6).
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : array_like, shape (N,)
+        Node positions.
+    nx, ny : array_like, shape (N,)
+        Outward unit normal at the nodes.
+    kappa : array_like, shape (N,)
+        Curvature (``+1/R`` on a counter-clockwise circle).
+    w : float or array_like, shape (N,)
+        Node weights of dsigma (``g_j / N``).
+    pairs, method
+        As in :func:`adhesion_energy`.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
+    B, F = adhesion_fields(kernel, x, y, w, pairs=pairs, method=method)
+    return -(F[:, 0] * np.asarray(nx) + F[:, 1] * np.asarray(ny) + np.asarray(kappa) * B)
+
+
+class PairDerivatives(NamedTuple):
+    """Per unordered pair ``(i, j)``, ``i < j``: ``d = X_i - X_j``, ``A'(|d|^2)`` and
+    the symmetric 2x2 matrix ``H = 2 A''(|d|^2) d d^T + A'(|d|^2) I``."""
+
+    i: np.ndarray
+    j: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+    dA: np.ndarray
+    hxx: np.ndarray
+    hxy: np.ndarray
+    hyy: np.ndarray
+
+
+def adhesion_pair_derivatives(kernel, x, y, *, pairs=None, method="neighbours"):
+    """Pair terms of the derivatives of ``B`` and ``force`` with respect to positions.
+
+    For a directed pair ``(p, q)``, ``p != q``, ``d = X_p - X_q``, ``l = |d|^2``
+    and weights held fixed:
+
+        dB_p/dX_q     = -4 w_q A'(l) d,
+        dforce_p/dX_q = -4 w_q H,     H = 2 A''(l) d d^T + A'(l) I,
+
+    and the diagonal blocks are ``dB_p/dX_p = force_p``,
+    ``dforce_p/dX_p = 4 sum_q w_q H_pq`` (translation invariance). ``H`` is
+    the same for both orientations of a pair, ``d`` changes sign; so the terms
+    are returned once per unordered pair (O(P) memory, no 2x2xP arrays).
+
+    Returns
+    -------
+    PairDerivatives
+        Fields ``i, j, dx, dy, dA, hxx, hxy, hyy``, each shape (P,).
+
+    See Also
+    --------
+    adhesion_field_jacobians : the assembled sparse matrices.
+    """
+    x, y = _check_positions(x, y)
+    i, j = _resolve_pairs(kernel, x, y, pairs, method)
+    dx = x[i] - x[j]
+    dy = y[i] - y[j]
+    l = dx * dx + dy * dy
+    _, dAv, d2Av = kernel.derivatives(l)
+    t = 2.0 * d2Av
+    return PairDerivatives(i, j, dx, dy, dAv, t * dx * dx + dAv, t * dx * dy, t * dy * dy + dAv)
+
+
+def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"):
+    """Sparse Jacobians of ``B`` and ``force`` with respect to the positions (fixed ``w``).
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : array_like, shape (N,)
+    w : float or array_like, shape (N,)
+    pairs, method
+        As in :func:`adhesion_energy`.
+
+    Returns
+    -------
+    JB : scipy.sparse.csr_matrix, shape (N, 2N)
+        ``dB_p / d(x, y)``; columns ordered ``[x_0..x_{N-1}, y_0..y_{N-1}]``.
+    JF : scipy.sparse.csr_matrix, shape (2N, 2N)
+        ``d(force_x, force_y) / d(x, y)``, rows ``[force_x; force_y]``.
+    """
+    x, y = _check_positions(x, y)
+    N = x.size
+    w = _weights(w, N)
+    t = adhesion_pair_derivatives(kernel, x, y, pairs=pairs, method=method)
+    B, F = adhesion_fields(kernel, x, y, w, pairs=(t.i, t.j))
+    p = np.concatenate([t.i, t.j])
+    q = np.concatenate([t.j, t.i])
+    sgn = np.concatenate([np.ones(t.i.size), -np.ones(t.i.size)])
+    wq = -4.0 * w[q]
+    d = (np.concatenate([t.dx, t.dx]) * sgn, np.concatenate([t.dy, t.dy]) * sgn)
+    H = {(0, 0): np.tile(t.hxx, 2), (0, 1): np.tile(t.hxy, 2), (1, 1): np.tile(t.hyy, 2)}
+    H[(1, 0)] = H[(0, 1)]
+    n = np.arange(N)
+    rows, cols, vals = [], [], []
+    for b in range(2):
+        rows += [p, n]
+        cols += [b * N + q, b * N + n]
+        vals += [wq * np.tile(t.dA, 2) * d[b], F[:, b]]
+    JB = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(N, 2 * N))
+    rows, cols, vals = [], [], []
+    for a in range(2):
+        for b in range(2):
+            v = wq * H[(a, b)]
+            rows += [a * N + p, a * N + n]
+            cols += [b * N + q, b * N + n]
+            vals += [v, -np.bincount(p, v, N)]
+    JF = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(2 * N, 2 * N))
+    return JB, JF
+
+
+# --------------------------------------------------------- Curve-level energy
+class Adhesion(Energy):
+    """Two-point adhesion-repulsion energy of a :class:`~qsa.curve.Curve` (e:AdhE, e:LJ).
+
+    Parameters
+    ----------
+    A0 : float
+        Kernel height (repulsion at contact), ``> 0``.
+    l_star : float
+        Screening length, ``> 0``.
+    a : float
+        Shape parameter: ``A`` changes sign at ``|d| = a l_star``; paired sheets
+        settle at the separation ``l_star sqrt(a^2 + 1/2)`` (MATH.md section 6).
+    method : {"neighbours", "dense"}
+        Cutoff neighbour list (O(N) for a short-range kernel) or all pairs.
+
+    Notes
+    -----
+    The node quadrature is ``dsigma_j = g_j / N`` in both integrals, diagonal
+    included. Provided: ``energy``, ``fields`` (B and the force 𝔸),
+    ``extrinsic_gradient`` ``(𝔸.n + kappa B, 0)`` (e:Adh-Ex_grad),
+    ``normal_velocity`` ``-(𝔸.n + kappa B)`` (e:Adh-NV), and ``gradient``, the
+    intrinsic gradient ``(M-dagger)^{-1}`` of the extrinsic one (e:Adh-In_grad),
+    taken as the least-squares solution orthogonal to span Psi (dense, O(N^3)).
+    The intrinsic Hessian of a two-point energy is nonlocal and is not provided.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> E = Adhesion(A0=10.0, l_star=0.5, a=1.0)
+    >>> c = Curve.circle(1.0, Fourier(65))
+    >>> V = E.normal_velocity(c)          # constant on a circle
+    >>> bool(np.ptp(V) < 1e-10 * np.abs(V).max())
+    True
+    """
+
+    def __init__(self, A0, l_star, a=1.0, method="neighbours"):
+        if method not in ("neighbours", "dense"):
+            raise ValueError(f"method must be 'neighbours' or 'dense', got {method!r}")
+        self.kernel = AdhesionKernel(A0, l_star, a)
+        self.A0, self.l_star, self.a = self.kernel.A0, self.kernel.l_star, self.kernel.a
+        self.method = method
+
+    def __repr__(self):
+        return f"Adhesion(A0={self.A0}, l_star={self.l_star}, a={self.a})"
+
+    def _data(self, c):
+        x, y = c.positions()
+        return x, y, c.dsigma
+
+    def energy(self, c) -> float:
+        x, y, w = self._data(c)
+        return adhesion_energy(self.kernel, x, y, w, method=self.method)
+
+    def fields(self, c):
+        """``(B, force)``: B shape (N,), the force 𝔸 shape (N, 2)."""
+        x, y, w = self._data(c)
+        return adhesion_fields(self.kernel, x, y, w, method=self.method)
+
+    def extrinsic_gradient(self, c) -> np.ndarray:
+        """``(𝔸.n + kappa B, 0)`` in ``<.,.>``, shape (2N,) (e:Adh-Ex_grad)."""
+        B, force = self.fields(c)
+        n = c.normal()
+        return np.concatenate([force[:, 0] * n[0] + force[:, 1] * n[1] + c.kappa * B,
+                               np.zeros(c.N)])
+
+    def normal_velocity(self, c) -> np.ndarray:
+        """``V^n_A = -(𝔸.n + kappa B)``, shape (N,) (e:Adh-NV)."""
+        return -self.extrinsic_gradient(c)[: c.N]
+
+    def gradient(self, c) -> np.ndarray:
+        """Intrinsic gradient ``(M-dagger)^{-1} (𝔸.n + kappa B, 0)``, orthogonal to span Psi."""
+        from qsa import geometry
+        from qsa.linalg import to_dense
+
+        e = self.extrinsic_gradient(c)
+        w = np.sqrt(np.concatenate([c.dsigma, c.dsigma]))
+        Md = to_dense(geometry.M_adjoint(c))
+        y, *_ = np.linalg.lstsq(w[:, None] * Md / w[None, :], w * e, rcond=1e-10)
+        return y / w
+
+    def hessian(self, c):
+        raise NotImplementedError(
+            "the intrinsic Hessian of a two-point energy is nonlocal and not provided; "
+            "use extrinsic_gradient / normal_velocity, or the flow models' Jacobians")
