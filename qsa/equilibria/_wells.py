@@ -69,7 +69,9 @@ def resolve_well(well, kstar, *, default_kstar=5.0):
     ----------
     well : object or None
         ``None`` for the default quartic; otherwise an object with vectorised
-        ``W``, ``dW``, ``d2W`` and (optionally) a ``kstar`` attribute.
+        ``W``, ``dW``, ``d2W`` and (optionally) a ``kstar`` attribute and, for
+        polynomial wells, ``coefficients`` (``numpy.polyval`` order), which lets
+        the periodic-orbit construction work exactly near the separatrix.
     kstar : float or None
         The non-zero well. Taken from ``well.kstar`` when not given; when both
         are given they must agree.

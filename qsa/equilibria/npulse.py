@@ -61,7 +61,7 @@ def _check_pulses(n_pulses):
     return int(n_pulses)
 
 
-def resolving_size(kappa_of_s, tol=1e-13, max_size=20001):
+def resolving_size(kappa_of_s, tol=1e-14, max_size=20001):
     """Smallest odd Fourier size resolving a periodic function to ``tol`` (relative).
 
     Parameters
@@ -156,7 +156,7 @@ def npulse(n_pulses, alpha, well=None, grid=None, nu1=0.0, beta=5.0, kstar=None)
         Double well (default quartic ``k^2 (k - kstar)^2/4``).
     grid : Grid, int or None
         Grid of the returned curve; an int means ``Fourier(int)``; ``None`` picks the
-        smallest odd Fourier size that resolves the fronts to 1e-13
+        smallest odd Fourier size that resolves the fronts to 1e-14
         (:func:`resolving_size`).
     nu1 : float
         Multiplier of the total-curvature constraint (``Lambda_3 = -nu1``).

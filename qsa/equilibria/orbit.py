@@ -30,9 +30,20 @@ tangent) ``Theta = int_period psi dsigma = 2 int psi dsigma/dv dv``, both with
 composite Gauss-Legendre panels of width 1 in ``v``. ``R`` is evaluated without
 cancellation: for the quartic with ``nu1 = 0`` from the exact roots
 (``R = (d + x_a)(d + x_b)/4``, ``x_a = psi - a``, ``x_b = b - psi``, ``d`` the gap to the
-outer roots), otherwise from ``P(psi) = x_a * mean(P')`` on ``[a, psi]`` (or its
-mirror at ``b``), which stays accurate at the turning points. The orbit is sampled
-by inverting ``sigma(v)`` with safeguarded Newton steps.
+outer roots); for polynomial wells (the quartic with ``nu1 != 0``, or a well with a
+``coefficients`` attribute in ``numpy.polyval`` order) the orbit is labelled by the
+offset ``ystar`` of its turning point from the separatrix well ``s*`` of P, the other
+turning point by its offset from the other well, and near each turning point
+``P/x`` is the exact difference quotient of the Taylor polynomial of P about that
+well -- accurate for offsets down to ~1e-150, where double-precision roots would
+only resolve ``1e-16 kstar``. For other wells ``P(psi) = x_a * mean(P')`` on
+``[a, psi]`` (or its mirror at ``b``), which stays accurate at ordinary turning
+points: non-polynomial wells are limited to plateau depths well above
+``1e-16 kstar`` (:func:`orbit_with_turning` says so). The orbit is sampled by
+inverting ``sigma(v)`` with safeguarded Newton steps.
+
+No multiple precision is needed on these paths; ``mpmath`` serves the tests as
+an independent reference.
 """
 
 from __future__ import annotations
@@ -68,6 +79,9 @@ class _Family:
     nu2_c: float
     nu2_sep: float
     closed: bool  # quartic well and nu1 == 0: exact roots
+    star: float = None  # polynomial path: the well of P whose level is the separatrix
+    q: np.ndarray = None  # Taylor coefficients of W + nu1 psi about `star` (ascending)
+    q_wells: tuple = None  # the same about s_lo and about s_hi
 
     def P(self, psi, nu2):
         return self.well.W(psi) + self.nu1 * psi + nu2
@@ -76,10 +90,65 @@ class _Family:
         return self.well.dW(psi) + self.nu1
 
 
+def _poly(well, kstar):
+    """Ascending coefficients of W if it is a polynomial (quartic or ``well.coefficients``)."""
+    if is_quartic(well, kstar):
+        return np.array([0.0, 0.0, 0.25 * kstar**2, -0.5 * kstar, 0.25])
+    c = getattr(well, "coefficients", None)  # numpy.polyval order (highest first)
+    return None if c is None else np.asarray(c, dtype=float)[::-1].copy()
+
+
+def _poly_family(well, kstar, nu1, coef) -> _Family:
+    """Critical points from the polynomial; Taylor coefficients about the separatrix well."""
+    P0 = np.polynomial.Polynomial(coef + np.r_[0.0, nu1, np.zeros(len(coef) - 2)])
+    dP, d2P = P0.deriv(), P0.deriv(2)
+    crit = []
+    for r in dP.roots():
+        if abs(r.imag) > 1e-9 * kstar:
+            continue
+        x = r.real
+        for _ in range(3):  # polish the root in double precision
+            d2 = d2P(x)
+            if d2 != 0:
+                x -= dP(x) / d2
+        crit.append(x)
+    crit = np.sort(np.array(crit))
+    best = None
+    for j in range(1, len(crit) - 1):
+        if d2P(crit[j]) < 0 < d2P(crit[j - 1]) and d2P(crit[j + 1]) > 0:
+            if best is None or abs(crit[j] - 0.5 * kstar) < abs(crit[best] - 0.5 * kstar):
+                best = j
+    if best is None:
+        raise ValueError(
+            f"nu1={nu1}: W'(psi) + nu1 has no maximum of P between two minima, so "
+            "alpha^2 psi'' - W'(psi) = nu1 has no periodic orbits (|nu1| too large)"
+        )
+    c, s_lo, s_hi = crit[best], crit[best - 1], crit[best + 1]
+    if nu1 == 0.0 and abs(s_lo) < 1e-8 * kstar and abs(s_hi - kstar) < 1e-8 * kstar:
+        s_lo, s_hi = 0.0, kstar  # the wells themselves, exactly
+
+    def taylor(s0):
+        q = (P0(np.polynomial.Polynomial([s0, 1.0]))).coef
+        q = np.r_[q, np.zeros(max(0, 3 - len(q)))]
+        q[1] = 0.0  # s0 is a critical point of P0 (exactly, in the shifted coordinate)
+        return q
+
+    q_lo, q_hi = taylor(s_lo), taylor(s_hi)
+    if nu1 == 0.0:  # equal-depth wells (checked by resolve_well): equal levels exactly
+        q_lo[0] = q_hi[0] = 0.0
+    star = s_hi if q_hi[0] >= q_lo[0] else s_lo
+    q = q_hi if star == s_hi else q_lo
+    return _Family(well, kstar, float(nu1), c, s_lo, s_hi, -float(P0(c)), -float(q[0]),
+                   False, star, q, (q_lo, q_hi))
+
+
 def _family(well, kstar, nu1) -> _Family:
     if is_quartic(well, kstar) and nu1 == 0.0:
         k = kstar
         return _Family(well, k, 0.0, 0.5 * k, 0.0, k, -(k**4) / 64, 0.0, True)
+    coef = _poly(well, kstar)
+    if coef is not None:
+        return _poly_family(well, kstar, nu1, coef)
     k = np.linspace(-1.0, 2.0, 3001) * kstar
     dP = np.asarray(well.dW(k), dtype=float) + nu1
     idx = np.nonzero(np.sign(dP[:-1]) * np.sign(dP[1:]) <= 0)[0]
@@ -199,13 +268,61 @@ class PeriodicOrbit:
         slope = h / (np.cosh(v) ** 2 * self._t["F"](v))
         return np.where(rising, slope, -slope)
 
-    @property
-    def range_info(self) -> str:
-        return f"nu2 in ({self._t['family'].nu2_c!r}, {self._t['family'].nu2_sep!r})"
+
+def _Q(q, y):
+    """``P0(star + y) - P0(star)`` from the Taylor coefficients (no cancellation)."""
+    return sum(q[k] * y**k for k in range(2, len(q)))
 
 
-def _build(fam: _Family, alpha, nu2, *, rho=None) -> PeriodicOrbit:
-    """Orbit for ``nu2`` (or, on the exact quartic path, for ``rho = 2 sqrt(-nu2)``)."""
+def _Q_difference_quotient(q, y, x):
+    """``(Q(y + x) - Q(y)) / x`` by ``A^k - B^k = (A - B) sum A^(k-1-j) B^j``."""
+    A = y + x
+    out = 0.0
+    for k in range(2, len(q)):
+        out = out + q[k] * sum(A ** (k - 1 - j) * y**j for j in range(k))
+    return out
+
+
+def _poly_orbit(fam, nu2, ystar):
+    """Turning points and ``R`` for a polynomial well, exact near both wells of P.
+
+    The orbit is labelled by ``ystar`` = (turning point near ``star``) - ``star``; then
+    ``nu2 = nu2_sep - Q*(ystar)`` with ``Q*`` the Taylor polynomial of P about ``star``
+    without its constant. The other turning point is ``s_o + y_o`` with
+    ``Q_o(y_o) = Q*(ystar) + (P(star) - P(s_o))`` about the other well ``s_o``. Near each
+    turning point ``P(t + x) / x`` is the difference quotient of the Taylor polynomial
+    there -- sums of same-sign terms, accurate even when the offsets are far below
+    the rounding unit of the wells' positions.
+    """
+    q_lo, q_hi = fam.q_wells
+    high = fam.star == fam.s_hi  # the separatrix is reached at the upper well
+    if ystar is None:  # from nu2: Q*(ystar) = nu2_sep - nu2 on the segment star -> c
+        target = fam.nu2_sep - nu2
+        ystar = brentq(lambda y: _Q(fam.q, y) - target, 0.0, fam.c - fam.star, xtol=1e-300,
+                       rtol=1e-15, maxiter=500)
+    else:
+        nu2 = fam.nu2_sep - _Q(fam.q, ystar)
+    level = _Q(fam.q, ystar)
+    s_o, q_o = (fam.s_lo, q_lo) if high else (fam.s_hi, q_hi)
+    level_o = level + (fam.q[0] - q_o[0])
+    y_o = brentq(lambda y: _Q(q_o, y) - level_o, 0.0, fam.c - s_o, xtol=1e-300, rtol=1e-15,
+                 maxiter=500)
+    y_a, y_b = (y_o, ystar) if high else (ystar, y_o)
+    a, b = fam.s_lo + y_a, fam.s_hi + y_b
+
+    def R(xa, xb, v):
+        low = v <= 0
+        pa = _Q_difference_quotient(q_lo, y_a, np.where(low, xa, 0.0))  # P(a + x_a) / x_a
+        pb = -_Q_difference_quotient(q_hi, y_b, -np.where(low, 0.0, xb))  # P(b - x_b) / x_b
+        return np.where(low, pa / xb, pb / xa)
+
+    depth = min(abs(y_a), abs(y_b))
+    return a, b, nu2, depth, R, abs(y_a), abs(y_b)
+
+
+def _build(fam: _Family, alpha, nu2, *, rho=None, ystar=None) -> PeriodicOrbit:
+    """Orbit for ``nu2`` (exact quartic path: ``rho = 2 sqrt(-nu2)``; polynomial path:
+    ``ystar``, the offset of the separatrix-side turning point from its well)."""
     k = fam.kstar
     if fam.closed:
         if rho is None:
@@ -220,6 +337,9 @@ def _build(fam: _Family, alpha, nu2, *, rho=None) -> PeriodicOrbit:
 
         def R(xa, xb, v):
             return 0.25 * (d + xa) * (d + xb)
+    elif fam.q is not None:
+        a, b, nu2, depth, R, d_lo, d_hi = _poly_orbit(fam, nu2, ystar)
+        h = 0.5 * (b - a)
     else:
         opts = {"xtol": 1e-300, "rtol": 1e-15, "maxiter": 500}
         a = brentq(lambda x: float(fam.P(x, nu2)), fam.s_lo, fam.c, **opts)
@@ -362,6 +482,12 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
         def orbit(t):
             return _build(fam, alpha, None, rho=0.25 * kstar**2 * np.exp(-t))
         t_max = 650.0
+    elif fam.q is not None:
+        y0 = fam.c - fam.star
+
+        def orbit(t):
+            return _build(fam, alpha, None, ystar=y0 * np.exp(-t))
+        t_max = float(np.log(abs(y0) / 1e-150))  # keep Q(ystar) ~ ystar^2 above underflow
     else:
         span = fam.nu2_sep - fam.nu2_c
         floor = 64 * np.finfo(float).eps * max(abs(fam.nu2_sep), abs(fam.nu2_c))
@@ -378,9 +504,11 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
     ts = [1e-6, 1e-3, 0.03, 0.1, 0.3, 1.0]
     while ts[-1] < t_max:
         ts.append(min(2 * ts[-1], t_max))
-    prev_t, prev_f, seen = None, None, []
+    prev_t, prev_f, seen, depth = None, None, [], None
     for t in ts:
-        ft = f(t)
+        orb = orbit(t)
+        ft = orb.turning - target
+        depth = orb.depth
         seen.append(ft + target)
         if ft == 0:
             return orbit(t)
@@ -398,5 +526,6 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
         )
     raise ValueError(
         f"no periodic orbit turns by {target:.6g}: the family with alpha={alpha}, "
-        f"nu1={fam.nu1} turns by {lo:.6g} ... {hi:.6g} per pulse.{cond}"
+        f"nu1={fam.nu1} turns by {lo:.6g} ... {hi:.6g} per pulse (followed to plateau "
+        f"depth {depth:.1e} from the separatrix).{cond}"
     )

@@ -31,6 +31,8 @@ Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term)
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.special import expit
 
@@ -458,6 +460,4 @@ def splice_polygon(angles, facets, alpha, well=None, grid=None, kstar=None, tol=
     positions, L = polygon_positions(ang, f, kstar)
     eq = splice(positions, alpha, well, grid, length=L, kstar=kstar, tol=tol,
                 max_iter=max_iter, cutoff=cutoff, **kwargs)
-    eq.params["angles"] = ang.tolist()
-    eq.params["facets"] = f.tolist()
-    return eq
+    return replace(eq, params={**eq.params, "angles": ang.tolist(), "facets": f.tolist()})

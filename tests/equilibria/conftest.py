@@ -50,6 +50,16 @@ class SexticWell:
         return d2q * r + 2 * dq * dr + q * d2r
 
 
+class SexticPolyWell(SexticWell):
+    """The sextic, declaring its coefficients (numpy.polyval order): exact orbit path."""
+
+    @property
+    def coefficients(self):
+        quartic = np.poly1d([0.25, -0.5 * self.kstar, 0.25 * self.kstar**2, 0, 0])
+        factor = np.poly1d([self.b, -self.b * self.kstar, 1 + self.b * self.kstar**2 / 4])
+        return (quartic * factor).coeffs
+
+
 import pytest  # noqa: E402
 
 
@@ -61,3 +71,8 @@ def sine_well():
 @pytest.fixture
 def sextic_well():
     return SexticWell()
+
+
+@pytest.fixture
+def sextic_poly_well():
+    return SexticPolyWell()

@@ -8,7 +8,8 @@ from qsa.equilibria import Equilibrium, circle, npulse
 
 K = 5.0
 
-CASES = [(n, a) for n in range(2, 9) for a in (0.05, 0.1, 0.2, 0.3) if n * a < 1]
+CASES = [(n, a) for n in range(2, 9) for a in (0.05, 0.1, 0.15, 0.2, 0.25, 0.3) if n * a < 1]
+CASES += [(3, 0.33), (2, 0.49)]  # close to the existence limit N alpha < 1
 
 
 @pytest.mark.parametrize(("n", "alpha"), CASES)
@@ -115,3 +116,24 @@ def test_summary_is_json():
     eq = npulse(3, 0.2, kstar=K)
     d = json.loads(eq.to_json())
     assert d["kind"] == "npulse" and d["params"]["n_pulses"] == 3
+
+
+@pytest.mark.parametrize(("n", "alpha", "nu1"), [(2, 0.05, 0.3), (3, 0.05, 0.05), (5, 0.1, 0.3)])
+def test_nonzero_nu1_near_the_separatrix(n, alpha, nu1):
+    """nu1 != 0 (asymmetric pulses): exact near the separatrix via the polynomial path."""
+    eq = npulse(n, alpha, kstar=K, nu1=nu1)
+    assert eq.success, eq.message
+    assert eq.closure <= 1e-10 and eq.residual <= 1e-8 * eq.residual_scale
+    assert eq.params["turning"] * n == pytest.approx(2 * np.pi, rel=1e-13)
+
+
+@pytest.mark.parametrize("nu1", [0.0, 0.2])
+def test_polynomial_well_deep_plateaus(sextic_poly_well, sextic_well, nu1):
+    """A well declaring its coefficients gets the exact path (plateau depth ~1e-15 here)."""
+    eq = npulse(2, 0.05, sextic_poly_well, nu1=nu1)
+    assert eq.success, eq.message
+    assert eq.extra["orbit"].depth < 1e-12
+    assert eq.closure <= 1e-10 and eq.residual <= 1e-8 * eq.residual_scale
+    if nu1 == 0.0:  # the same well as plain callables cannot get this close in double
+        with pytest.raises(ValueError, match="separatrix"):
+            npulse(2, 0.05, sextic_well)

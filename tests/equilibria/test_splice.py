@@ -111,3 +111,14 @@ def test_invalid_requests():
         splice([0.0, 0.5, 1.0, 1.5], 0.1, length=3.0, kstar=K, cutoff=(1.0, 1.4))
     with pytest.raises(ValueError, match="alpha"):
         splice([0.0, 0.5, 1.0, 1.5], -0.1, length=3.0, kstar=K)
+
+
+def test_non_quartic_well_splice(sine_well):
+    eq = splice_polygon([np.pi / 2] * 4, [1.0] * 4, 0.05, well=sine_well)
+    assert eq.success and eq.closure <= 1e-12
+    # R_kappa ~ exp(-lambda d_min), lambda = pi sqrt(2A) / (alpha kstar): e^-7.9 here
+    lam = np.pi * np.sqrt(2 * sine_well.A) / (0.05 * sine_well.kstar)
+    scale = np.max(np.abs(sine_well.dW(np.linspace(0, 5, 101))))
+    assert np.max(np.abs(eq.extra["R_kappa"])) < 100 * np.exp(-lam * eq.params["d_min"]) * scale
+    with pytest.raises(ValueError, match="quartic"):
+        eq.extra["profile"].residual_kappa_mp([0.0])
