@@ -132,13 +132,21 @@ def test_stability_true_uses_spectra_or_says_it_is_missing():
     import qsa.spectra
 
     eq = circle(0.77, ALPHA, grid=Fourier(17), kstar=K, beta=BETA)
-    args = (factory(), eq.curve, "L_star", (eq.params["L_star"], 4.3, -0.1))
+    args = (factory(), eq.curve, "L_star", (eq.params["L_star"], 3.0, -0.1))
     if not hasattr(qsa.spectra, "spectrum"):
         with pytest.raises(ValueError, match="spectra"):
             continuation(*args, stability=True)
-    else:
-        b = continuation(*args, stability=True)
-        assert b.n_unstable is not None
+        return
+    b = continuation(*args, stability=True)
+    # circle spectrum (MATH.md section 4): mode k >= 2 (double) is unstable when
+    # alpha^2 k^2 k0^2 + W''(k0) < 0, mode 0 when k0^3 W''(k0) + 2 pi beta < 0
+    for p in b.points:
+        k0 = p.curve.kappa[0]
+        W2 = 0.5 * (6 * k0**2 - 6 * K * k0 + K**2)
+        ks = np.arange(2, 9)  # resolved by Fourier(17)
+        expected = 2 * int(np.sum(ALPHA**2 * ks**2 * k0**2 + W2 < 0))
+        expected += int(k0**3 * W2 + 2 * np.pi * BETA < 0)
+        assert p.n_unstable == expected
 
 
 def test_bad_input():
