@@ -128,27 +128,24 @@ def _cumulative_transpose(grid, v, Cmat=None):
 
 
 def _blocks(H, N):
-    """``(H_kk, H_gk, H @ [0, 1])`` of a dense, sparse or sparse-plus-low-rank Hessian."""
+    """``(H_kk, H_gk, H @ [0, 1], low)`` of a dense, sparse or sparse-plus-low-rank Hessian.
+
+    ``low = (P_k, P_g, Q)`` holds the low-rank part restricted to kappa columns,
+    ``H_kk += P_k Q^T``, ``H_gk += P_g Q^T`` (None if there is none).
+    """
     ones = np.concatenate([np.zeros(N), np.ones(N)])
     col = H @ ones
     if isinstance(H, SparsePlusLowRank):
         S = H.S
-        Ukk, Vk = H.U[:N], H.V[:N]
-        Ug = H.U[N:]
-        if np.any(Ukk) and np.any(Vk):
-            low = [(Ukk, Vk)]
-        else:
-            low = []
-        if np.any(Ug) and np.any(Vk):
-            low_g = [(Ug, Vk)]
-        else:
-            low_g = []
-        return S[:N, :N].tocsr(), S[N:, :N].tocsr(), col, low, low_g
+        # keep the low-rank columns that act on kappa and reach the kappa or g rows
+        keep = np.any(H.V[:N] != 0, axis=0) & np.any(H.U != 0, axis=0)
+        low = (H.U[:N, keep], H.U[N:, keep], H.V[:N, keep]) if np.any(keep) else None
+        return S[:N, :N].tocsr(), S[N:, :N].tocsr(), col, low
     if sp.issparse(H):
         H = H.tocsr()
-        return H[:N, :N], H[N:, :N], col, [], []
+        return H[:N, :N], H[N:, :N], col, None
     H = np.asarray(H)
-    return H[:N, :N], H[N:, :N], col, [], []
+    return H[:N, :N], H[N:, :N], col, None
 
 
 def _as_parts(energy):
@@ -356,6 +353,14 @@ class EquilibriumSystem:
             out[2] = abs(F[N + 3]) / max(np.max(np.abs(c.kappa)), 1.0)
         return out
 
+    def merit(self, F, c: Curve, scale: float) -> float:
+        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows)."""
+        N = self.N
+        m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
+        if self.phase is not None:
+            m += (F[N + 3] / max(np.max(np.abs(c.kappa)), 1.0)) ** 2
+        return float(np.sqrt(m))
+
     def scaled_norm(self, F, c: Curve, scale: float) -> float:
         """``max`` of :meth:`scaled_parts`: the relative residual of the square system."""
         return float(np.max(self.scaled_parts(F, c, scale)))
@@ -385,16 +390,15 @@ class EquilibriumSystem:
         grad = energy.gradient(c)
         mu, xi = grad[:N], L * grad[N:]
         H = energy.hessian(c)
-        Hkk, Hgk, Hcol, low_kk, low_gk = _blocks(H, N)
+        Hkk, Hgk, Hcol, lowH = _blocks(H, N)
         lap = _laplace_matrix(c)
         Gm = lap + grid.diag(k**2)  # = -G
         diag = grid.diag
         A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
         low = []
-        for P, Q in low_kk:
-            low.append((Gm @ P, Q))
-        for P, Q in low_gk:
-            low.append((-(k * L)[:, None] * P, Q))
+        if lowH is not None:
+            Pk, Pg, Q = lowH
+            low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
         if sp.issparse(A):
             A = A.tocsr()
         dmu = Hcol[:N] - mu / L
@@ -539,14 +543,16 @@ def _check_maxiter(maxiter):
 def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True):
     """Damped Newton on ``system.residual``; returns ``(x, status, history, n_iter, floor)``.
 
-    The full step is taken whenever it decreases the scaled residual; otherwise
-    the step is halved (at most 10 times). Never raises for non-convergence:
+    The full step is taken whenever it decreases the merit :meth:`EquilibriumSystem.merit`
+    (a smooth 2-norm, for which the Newton direction is a descent direction);
+    otherwise the step is halved (at most 10 times). Never raises for non-convergence:
     the best state is returned with a status code (see ``STATUS_MESSAGES``).
     """
     x = np.array(x0, dtype=float)
     scale = residual_scale(system.energy if energy is None else energy, system.curve(x))
     F = system.residual(x, energy)
     r = system.scaled_norm(F, system.curve(x), scale)
+    m = system.merit(F, system.curve(x), scale)
     history = [r]
     best = (r, x.copy())
     status = 2
@@ -581,10 +587,12 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
             if xt[system.N] > 0:
                 try:
                     Ft = system.residual(xt, energy)
-                    rt = system.scaled_norm(Ft, system.curve(xt), scale)
+                    ct = system.curve(xt)
+                    rt = system.scaled_norm(Ft, ct, scale)
+                    mt = system.merit(Ft, ct, scale)
                 except ValueError:
-                    rt = np.inf
-                if np.isfinite(rt) and (rt < r or not line_search):
+                    rt = mt = np.inf
+                if np.isfinite(rt) and (mt < (1 - 1e-4 * t) * m or rt < r or not line_search):
                     accepted = True
                     break
             t *= 0.5
@@ -594,7 +602,7 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
             floor = _noise_floor(system, x, scale, energy)
             status = 1 if _at_floor(system, x, F, scale, tol, floor) else 4
             break
-        x, F, r = xt, Ft, rt
+        x, F, r, m = xt, Ft, rt, mt
         history.append(r)
         if r < best[0]:
             best = (r, x.copy())

@@ -218,3 +218,48 @@ def test_cli_polish_option(capsys):
     assert out["kind"] == "polished" and out["success"] and out["status"] == 0
     assert out["residual"] <= 1e-10 * out["residual_scale"] and out["closure"] < 1e-12
     assert out["params"]["d_min"] > 0  # construction parameters are kept
+
+
+class _TotalCurvatureSquared:
+    """``E = c/2 (int kappa ds)^2``: its Hessian is low rank in the kappa block."""
+
+    def __new__(cls, coef):
+        import scipy.sparse as sps
+
+        from qsa.energies.base import Energy
+        from qsa.linalg import SparsePlusLowRank
+
+        class TotalCurvatureSquared(Energy):
+            def energy(self, c):
+                return 0.5 * coef * (c.grid.weights @ c.kappa) ** 2
+
+            def gradient(self, c):
+                m = c.grid.weights @ c.kappa
+                return np.concatenate([coef * m / c.g, np.zeros(c.N)])
+
+            def hessian(self, c):
+                N = c.N
+                U = np.concatenate([coef / c.g, np.zeros(N)])
+                V = np.concatenate([c.grid.weights, np.zeros(N)])
+                if c.grid.sparse:
+                    return SparsePlusLowRank(sps.csr_matrix((2 * N, 2 * N)), U, V)
+                return np.outer(U, V)
+
+        return TotalCurvatureSquared()
+
+
+@pytest.mark.parametrize("kind", [Fourier, FiniteDifference])
+def test_jacobian_with_low_rank_kappa_hessian(kind):
+    c = skew_curve(kind(41))
+    E = Faceting(0.1, K) + Perimeter(5.0, 6.0) + _TotalCurvatureSquared(0.7)
+    S = EquilibriumSystem(E, c)
+    x = S.pack(c)
+    J = to_dense(S.jacobian(x))
+    r = J.shape[0] - x.size  # low-rank terms are carried as extra unknowns z = Q^T dkappa
+    assert r == (1 if kind is FiniteDifference else 0)
+    if r:
+        # eliminate z: the Schur complement is the Jacobian of F
+        A, B, C, D = J[:-r, :-r], J[:-r, -r:], J[-r:, :-r], J[-r:, -r:]
+        J = A - B @ np.linalg.solve(D, C)
+    Jfd = _fd_jacobian(S, x)
+    assert np.max(np.abs(J - Jfd)) < 1e-7 * np.max(np.abs(J))
