@@ -77,12 +77,15 @@ def build(args):
 def run(args):
     eq = build(args)
     if getattr(args, "polish", False):
+        from dataclasses import replace
+
         from qsa.equilibria.newton import polish
 
         constructed = eq
         eq = polish(eq.energy, eq.curve, tol=args.tol)
-        eq.params.update({k: v for k, v in constructed.params.items()
-                          if k not in eq.params and isinstance(v, (int, float))})
+        kept = {k: v for k, v in constructed.params.items()
+                if k not in eq.params and isinstance(v, (int, float))}
+        eq = replace(eq, params={**eq.params, **kept})
     summary = eq.summary()
     if args.plot:
         from qsa import plotting
