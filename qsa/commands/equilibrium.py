@@ -36,6 +36,11 @@ def add_parser(sub):
         q.add_argument("--fd", action="store_true", help="finite differences instead of Fourier")
         q.add_argument("--json", action="store_true", help="JSON summary on stdout")
         q.add_argument("--plot", metavar="FILE", help="write the curve and kappa(s) to FILE")
+        q.add_argument("--polish", action="store_true",
+                       help="polish the state by Newton on V^n = 0 with closure (exact "
+                            "discrete equilibrium of the reported energy)")
+        q.add_argument("--tol", type=float, default=1e-10,
+                       help="relative residual target of --polish (default 1e-10)")
         q.set_defaults(func=run)
 
     q = kinds.add_parser("npulse", help="N-fold symmetric faceted equilibrium")
@@ -71,6 +76,16 @@ def build(args):
 
 def run(args):
     eq = build(args)
+    if getattr(args, "polish", False):
+        from dataclasses import replace
+
+        from qsa.equilibria.newton import polish
+
+        constructed = eq
+        eq = polish(eq.energy, eq.curve, tol=args.tol)
+        kept = {k: v for k, v in constructed.params.items()
+                if k not in eq.params and isinstance(v, (int, float))}
+        eq = replace(eq, params={**eq.params, **kept})
     summary = eq.summary()
     if args.plot:
         from qsa import plotting

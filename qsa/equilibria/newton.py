@@ -1,0 +1,714 @@
+"""Newton polishing of discrete equilibria: ``V^n = 0`` with closure, in scaled arc length.
+
+The equilibrium equations of a gradient flow ``U_t = -M M-dagger nabla_I E`` are
+``V^n(U) = -[M-dagger nabla_I E]_1 = 0`` (e:L2grad, e:Abs-CP) on the closed manifold
+``C(U) = 0`` (e:C1, e:C2). They are geometric: every reparameterization of an
+equilibrium is one. :func:`polish` fixes the gauge and solves a square system.
+
+Gauge
+-----
+* *Reparameterization*: scaled arc length, ``g = L`` constant (one unknown ``L``).
+* *Translation and rotation*: the intrinsic state ``(kappa, L)`` with fixed base
+  angle ``theta0`` and base point ``gamma(0)`` does not see translations; a
+  rotation of the curve is a shift of the parameter origin. The shift is fixed
+  by the phase condition ``<kappa - kappa_ref, nabla_s kappa_ref> = 0`` against
+  the initial guess.
+
+Unknowns and equations (``N + 4`` each)::
+
+    V^n(kappa, L) + sum_j a_j phi_j = 0      (N)
+    C(kappa, L)                     = 0      (3)
+    <kappa - kappa_ref, d_s kappa_ref> = 0   (1)
+
+with unknowns ``x = (kappa, L, a_1, a_2, a_3)``. The unfolding fields ``phi_j`` are the
+normal components of the rigid motions of the initial guess (``e1.n``, ``e2.n``,
+``(gamma - gamma_c).tau``): on closed curves ``<V^n, phi_j> = 0`` identically
+(``ker M-dagger`` argument, MATH.md section 2), so the ``N + 3`` equations for
+``N + 1`` unknowns are consistent but carry three redundancies; the unfolding
+parameters ``a_j`` make the system square and are zero at the solution (their
+size is reported: it measures how well the discrete identities hold). For
+circles the shift and the rotation are void and the phase row and ``a_3`` are
+dropped.
+
+Jacobian
+--------
+Exact derivatives of the *discrete* residual (verified against central
+differences in the tests). With ``mu = d_kappa E``, ``xi = g d_g E`` (``nabla_I E``
+in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``,
+
+    V^n = (Delta_s + kappa^2) mu - kappa xi,
+    dV^n/dkappa = (Delta_s + kappa^2) H_kk + diag(2 kappa mu - xi) - diag(kappa g) H_gk,
+    dV^n/dL     = (Delta_s + kappa^2)(H_kg 1 + H_gg-part - mu/L) - (2/L) Delta_s mu
+                  - kappa L (H 1)_g,
+
+(``d mu = [H dU]_kappa - (dg/g) mu``: the dsigma-gradient moves with its weight;
+``d xi = g [H dU]_g``; ``Delta_s`` scales like ``1/L^2``). The closure rows are the
+exact derivatives of the grid's quadrature of ``C`` with ``theta = theta0 + D kappa``.
+Finite-difference grids give a sparse ``N x N`` block bordered by 4 dense
+rows and columns, factored by sparse LU: O(N) per Newton step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from qsa.curve import Curve
+from qsa.discretize import FiniteDifference
+from qsa.equilibria.result import Equilibrium
+from qsa.linalg import SparsePlusLowRank
+
+__all__ = ["polish", "PolishResult", "EquilibriumSystem", "multipliers", "residual_scale",
+           "normal_velocity"]
+
+_EPS = np.finfo(float).eps
+
+STATUS_MESSAGES = {
+    0: "converged: relative residual below tol",
+    1: "converged to the round-off floor (tol is below what this grid can resolve)",
+    2: "maximum number of Newton iterations reached",
+    3: "singular or non-finite Newton system",
+    4: "line search failed: the residual does not decrease along the Newton direction",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class PolishResult(Equilibrium):
+    """An :class:`Equilibrium` from :func:`polish`, with the Newton record.
+
+    Attributes (besides those of :class:`Equilibrium`)
+    --------------------------------------------------
+    status : int
+        0 converged to ``tol``, 1 converged to the round-off floor, 2 ``maxiter``
+        reached, 3 singular system, 4 line search failed (see ``STATUS_MESSAGES``).
+    n_iter : int
+        Newton steps taken.
+    history : ndarray, shape (n_iter + 1,)
+        Relative residual of the square system before each step and at the end:
+        ``max(max|V^n + a.phi| / scale, |C| / L)``.
+    unfolding : ndarray, shape (3,)
+        Final unfolding parameters ``a`` (zero up to round-off at a true equilibrium).
+    noise_floor : float
+        Estimated round-off level of the relative residual on this grid.
+    """
+
+    status: int = 0
+    n_iter: int = 0
+    history: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    unfolding: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    noise_floor: float = 0.0
+
+    def summary(self) -> dict:
+        out = super().summary()
+        out.update(status=int(self.status), n_iter=int(self.n_iter),
+                   history=[float(h) for h in self.history],
+                   unfolding=[float(a) for a in self.unfolding],
+                   noise_floor=float(self.noise_floor))
+        return out
+
+
+# ----------------------------------------------------------------------------- helpers
+def _cumulative_transpose(grid, v, Cmat=None):
+    """``C^T v`` for the grid's cumulative-integral matrix ``C`` (``C f = cumulative(f)``)."""
+    v = np.asarray(v, dtype=float)
+    if Cmat is not None:
+        return Cmat.T @ v
+    if isinstance(grid, FiniteDifference):
+        # trapezoid: (C f)_i = h sum_{j<i} (f_j + f_{j+1})/2
+        h = grid.h
+        tail = np.concatenate([np.cumsum(v[::-1])[::-1][1:], [0.0]])  # sum_{i>k} v_i
+        out = h * (tail + 0.5 * v)
+        out[0] = 0.5 * h * tail[0]
+        return out
+    return grid.cumulative_matrix().T @ v
+
+
+def _blocks(H, N):
+    """``(H_kk, H_gk, H @ [0, 1], low)`` of a dense, sparse or sparse-plus-low-rank Hessian.
+
+    ``low = (P_k, P_g, Q)`` holds the low-rank part restricted to kappa columns,
+    ``H_kk += P_k Q^T``, ``H_gk += P_g Q^T`` (None if there is none).
+    """
+    ones = np.concatenate([np.zeros(N), np.ones(N)])
+    col = H @ ones
+    if isinstance(H, SparsePlusLowRank):
+        S = H.S
+        # keep the low-rank columns that act on kappa and reach the kappa or g rows
+        keep = np.any(H.V[:N] != 0, axis=0) & np.any(H.U != 0, axis=0)
+        low = (H.U[:N, keep], H.U[N:, keep], H.V[:N, keep]) if np.any(keep) else None
+        return S[:N, :N].tocsr(), S[N:, :N].tocsr(), col, low
+    if sp.issparse(H):
+        H = H.tocsr()
+        return H[:N, :N], H[N:, :N], col, None
+    H = np.asarray(H)
+    return H[:N, :N], H[N:, :N], col, None
+
+
+def _as_parts(energy):
+    """Split an energy into single-density parts (for the residual scale)."""
+    from qsa.energies.local import LocalEnergy
+
+    parts = []
+    for t in energy.terms():
+        if isinstance(t, LocalEnergy):
+            for d in t.densities():
+                parts.append(_SingleDensity(d))
+        else:
+            parts.append(t)
+    return parts
+
+
+def _single_density_class():
+    from qsa.energies.local import LocalEnergy
+
+    class _Single(LocalEnergy):
+        def __init__(self, density):
+            self._d = density
+
+        def densities(self):
+            return (self._d,)
+
+    return _Single
+
+
+def _SingleDensity(d):
+    return _single_density_class()(d)
+
+
+def _laplace(c: Curve, f):
+    """``Delta_s f`` applied without forming the matrix (same discretization as
+    :func:`qsa.geometry.laplace_s`: ``-(1/g) E^T ((E f) / g_e)``)."""
+    grid = c.grid
+    E = grid.edge_difference()
+    ge = grid.edge_average() @ c.g
+    return -(E.T @ ((E @ f) / ge)) / c.g
+
+
+def _laplace_matrix(c: Curve):
+    """:func:`qsa.geometry.laplace_s`, with dense diagonal scalings done by broadcasting."""
+    if c.grid.sparse:
+        from qsa.geometry import laplace_s
+
+        return laplace_s(c)
+    E = c.grid.edge_difference()
+    ge = c.grid.edge_average() @ c.g
+    return -((E.T / ge[None, :]) @ E) / c.g[:, None]
+
+
+def normal_velocity(energy, c: Curve) -> np.ndarray:
+    """``V^n`` of ``energy`` at ``c``, shape (N,), equal to ``energy.normal_velocity(c)``.
+
+    Terms that use the generic formula ``V^n = (Delta_s + kappa^2) mu - kappa xi``
+    are evaluated with ``Delta_s`` applied matrix-free (O(N^2) instead of O(N^3)
+    on Fourier grids); other terms call their own ``normal_velocity``.
+    """
+    from qsa.energies.base import Energy, Perimeter
+
+    N = c.N
+    V = np.zeros(N)
+    mu = np.zeros(N)
+    xi = np.zeros(N)
+    generic = False
+    for t in energy.terms():
+        nv = type(t).normal_velocity
+        if nv is Energy.normal_velocity:
+            grad = t.gradient(c)
+            mu += grad[:N]
+            xi += c.g * grad[N:]
+            generic = True
+        elif isinstance(t, Perimeter):
+            V += -t.beta * (c.length() - t.L_star) * c.kappa
+        else:
+            V += t.normal_velocity(c)
+    if generic:
+        V += _laplace(c, mu) + c.kappa**2 * mu - c.kappa * xi
+    return V
+
+
+def residual_scale(energy, curve: Curve) -> float:
+    """Largest single term of ``V^n = Delta_s mu + kappa^2 mu - kappa xi``, split by density.
+
+    For ``Faceting + Perimeter`` the terms are ``alpha^2 Delta_s^2 kappa``,
+    ``Delta_s W'(kappa)``, ``kappa^2 mu`` and ``kappa g d_g E`` (as for
+    :func:`qsa.equilibria.npulse.faceting_residual`). ``max|V^n| / residual_scale``
+    is the relative residual.
+    """
+    N = curve.N
+    scale = 0.0
+    for p in _as_parts(energy):
+        grad = p.gradient(curve)
+        mu, xi = grad[:N], curve.g * grad[N:]
+        for t in (_laplace(curve, mu), curve.kappa**2 * mu, curve.kappa * xi):
+            scale = max(scale, float(np.max(np.abs(t))))
+    return scale if scale > 0 else 1.0
+
+
+def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
+    """Lagrange multipliers ``Lambda`` of ``nabla_I E = Lambda . Psi`` (e:Abs-CP), shape (3,).
+
+    The least-squares projection of ``nabla_I E`` onto ``span Psi`` in ``<.,.>``
+    (MATH.md section 4). For circles ``Psi_1, Psi_2`` are not independent of
+    ``Psi_3`` on a translation-invariant curve only if degenerate; a pseudo-inverse
+    of the Gram matrix is used.
+    """
+    from qsa.geometry import constraint_gradients
+
+    Psi = constraint_gradients(curve)
+    grad = energy.gradient(curve) if gradient is None else gradient
+    w = np.concatenate([curve.dsigma, curve.dsigma])
+    G = (Psi * w) @ Psi.T
+    b = (Psi * w) @ grad
+    return np.linalg.lstsq(G, b, rcond=1e-12)[0]
+
+
+def _equal_arclength(curve: Curve) -> Curve:
+    """The same curve (same base point and angle) reparameterized to constant ``g``."""
+    g = curve.g
+    if np.max(np.abs(g - g.mean())) <= 1e-13 * g.mean():
+        return curve if np.all(g == g[0]) else curve.with_g(np.full(curve.N, curve.length()))
+    grid = curve.grid
+    L = curve.length()
+    # sigma(s)/L - s is periodic; invert sigma(s) = L t at t = s_j by Newton.
+    p = grid.cumulative(g) / L - grid.s
+    t = grid.s
+    s = t.copy()
+    for _ in range(50):
+        r = s + grid.interpolate(p, s) - t
+        ds = r / (grid.interpolate(g, s) / L)
+        s = s - ds
+        if np.max(np.abs(ds)) < 1e-15:
+            break
+    kappa = grid.interpolate(curve.kappa, s)
+    return Curve(kappa, L, grid, curve.theta0, curve.origin)
+
+
+# ------------------------------------------------------------------------ the system
+class EquilibriumSystem:
+    """The square system ``F(x) = 0`` of :func:`polish` (see the module docstring).
+
+    Parameters
+    ----------
+    energy : Energy
+    reference : Curve
+        Initial guess with constant ``g``: supplies the grid, ``theta0``, ``gamma(0)``,
+        the phase reference and the unfolding fields ``phi_j``.
+    """
+
+    def __init__(self, energy, reference: Curve):
+        self.energy = energy
+        self.ref = reference
+        self.grid = reference.grid
+        self.N = reference.N
+        c = reference
+        N = self.N
+        dk = self.grid.derivative() @ c.kappa
+        self.circle = bool(np.max(np.abs(dk)) <= 1e-9 * max(np.max(np.abs(c.kappa)), 1e-300))
+        w = self.grid.weights
+        tau, n = c.tangent(), c.normal()
+        xy = c.positions()
+        centre = (xy @ c.dsigma) / c.length()
+        rot = np.sum((xy - centre[:, None]) * tau, axis=0)
+        phis = [n[0], n[1]] if self.circle else [n[0], n[1], rot]
+        self.phi = np.array([f / np.sqrt((f**2) @ w) for f in phis])  # (m, N)
+        if self.circle:
+            self.phase = None
+        else:
+            self.phase = w * dk / np.linalg.norm(w * dk)
+            self.phase_value = float(self.phase @ c.kappa)
+        self.n_unfold = self.phi.shape[0]
+        self._Cmat = None if self.grid.sparse else self.grid.cumulative_matrix()
+        self.size = N + 1 + self.n_unfold
+
+    # state <-> curve
+    def pack(self, curve: Curve) -> np.ndarray:
+        return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold)])
+
+    def curve(self, x) -> Curve:
+        N = self.N
+        return Curve(x[:N], x[N], self.grid, self.ref.theta0, self.ref.origin)
+
+    def residual(self, x, energy=None) -> np.ndarray:
+        """``F(x)``, shape (size,): ``[V^n + a.phi, C, phase]``."""
+        energy = self.energy if energy is None else energy
+        N = self.N
+        c = self.curve(x)
+        a = x[N + 1:]
+        V = normal_velocity(energy, c) + a @ self.phi
+        parts = [V, c.closure()]
+        if self.phase is not None:
+            parts.append([self.phase @ x[:N] - self.phase_value])
+        return np.concatenate(parts)
+
+    def scaled_parts(self, F, c: Curve, scale: float) -> np.ndarray:
+        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,)."""
+        N = self.N
+        out = np.zeros(3)
+        out[0] = np.max(np.abs(F[:N])) / scale
+        out[1] = np.linalg.norm(F[N:N + 3]) / c.length()
+        if self.phase is not None:
+            out[2] = abs(F[N + 3]) / max(np.max(np.abs(c.kappa)), 1.0)
+        return out
+
+    def merit(self, F, c: Curve, scale: float) -> float:
+        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows)."""
+        N = self.N
+        m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
+        if self.phase is not None:
+            m += (F[N + 3] / max(np.max(np.abs(c.kappa)), 1.0)) ** 2
+        return float(np.sqrt(m))
+
+    def scaled_norm(self, F, c: Curve, scale: float) -> float:
+        """``max`` of :meth:`scaled_parts`: the relative residual of the square system."""
+        return float(np.max(self.scaled_parts(F, c, scale)))
+
+    def jacobian_parts(self, x, energy=None):
+        """Blocks of ``dF/dx``: the ``N x N`` block ``A`` and dense borders.
+
+        Returns
+        -------
+        A : matrix (N, N)
+            ``dV^n/dkappa`` (sparse for finite differences, dense for Fourier).
+        B : ndarray (N, m)
+            Columns ``dV^n/dL`` and ``phi_j``.
+        Crows : ndarray (m', N)
+            Closure (and phase) rows, derivatives w.r.t. kappa.
+        D : ndarray (m', m)
+            Their derivatives w.r.t. ``(L, a)``.
+        low : list of (P, Q)
+            Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians).
+        """
+        energy = self.energy if energy is None else energy
+        N = self.N
+        grid = self.grid
+        c = self.curve(x)
+        L = x[N]
+        k = c.kappa
+        grad = energy.gradient(c)
+        mu, xi = grad[:N], L * grad[N:]
+        H = energy.hessian(c)
+        Hkk, Hgk, Hcol, lowH = _blocks(H, N)
+        lap = _laplace_matrix(c)
+        Gm = lap + grid.diag(k**2)  # = -G
+        diag = grid.diag
+        A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
+        low = []
+        if lowH is not None:
+            Pk, Pg, Q = lowH
+            low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
+        if sp.issparse(A):
+            A = A.tocsr()
+        dmu = Hcol[:N] - mu / L
+        dxi = L * Hcol[N:]
+        VL = Gm @ dmu - (2.0 / L) * (lap @ mu) - k * dxi
+        B = np.column_stack([VL, self.phi.T])
+        # closure rows: exact derivatives of the quadrature of C
+        w = grid.weights
+        th = c.theta()
+        g = c.g
+        cs, sn = np.cos(th), np.sin(th)
+        Ct1 = _cumulative_transpose(grid, -w * g * sn, self._Cmat)
+        Ct2 = _cumulative_transpose(grid, w * g * cs, self._Cmat)
+        rows = [g * Ct1, g * Ct2, w * g]
+        dL = [np.sum(w * cs) + Ct1 @ k, np.sum(w * sn) + Ct2 @ k, np.sum(w * k)]
+        m = B.shape[1]
+        if self.phase is not None:
+            rows.append(self.phase)
+            dL.append(0.0)
+        Crows = np.array(rows)
+        D = np.zeros((len(rows), m))
+        D[:, 0] = dL
+        return A, B, Crows, D, low
+
+    def jacobian(self, x, energy=None):
+        """Assembled ``dF/dx``, shape (size, size): sparse CSC for FD, dense for Fourier."""
+        A, B, Crows, D, low = self.jacobian_parts(x, energy)
+        return _assemble(A, B, Crows, D, low)
+
+
+def _assemble(A, B, Crows, D, low):
+    """``[[A, B, P], [Crows, D, 0], [Q^T, 0, -I]]`` (low-rank terms of A unfolded)."""
+    if low:
+        P = np.hstack([p for p, _ in low])
+        Q = np.hstack([q for _, q in low])
+        r = P.shape[1]
+    else:
+        r = 0
+    mB, mC = B.shape[1], Crows.shape[0]
+    if sp.issparse(A):
+        blocks = [[A, sp.csr_matrix(B)], [sp.csr_matrix(Crows), sp.csr_matrix(D)]]
+        if r:
+            blocks[0].append(sp.csr_matrix(P))
+            blocks[1].append(None)
+            blocks.append([sp.csr_matrix(Q.T), None, -sp.identity(r)])
+        return sp.bmat(blocks, format="csc")
+    top = np.hstack([A, B] + ([P] if r else []))
+    mid = np.hstack([Crows, D] + ([np.zeros((mC, r))] if r else []))
+    rows = [top, mid]
+    if r:
+        rows.append(np.hstack([Q.T, np.zeros((r, mB)), -np.eye(r)]))
+    return np.vstack(rows)
+
+
+class _Factor:
+    """LU factorization of the Newton matrix (sparse or dense) with the sign of its determinant."""
+
+    def __init__(self, J):
+        self.sparse = sp.issparse(J)
+        self.n = J.shape[0]
+        if self.sparse:
+            self.lu = spla.splu(sp.csc_matrix(J), permc_spec="COLAMD")
+            diagU = self.lu.U.diagonal()
+            self.singular = not np.all(np.isfinite(diagU)) or np.min(np.abs(diagU)) == 0
+            self._diag = diagU
+        else:
+            self.lu = sla.lu_factor(J, check_finite=True)
+            self._diag = np.diag(self.lu[0])
+            self.singular = np.min(np.abs(self._diag)) == 0
+
+    def solve(self, b):
+        if self.sparse:
+            return self.lu.solve(b)
+        return sla.lu_solve(self.lu, b)
+
+    def det_sign(self) -> int:
+        """Sign of ``det J`` (from the LU diagonal and the permutation parities)."""
+        s = int(np.prod(np.sign(self._diag)))
+        if self.sparse:
+            s *= _perm_parity(self.lu.perm_r) * _perm_parity(self.lu.perm_c)
+        else:
+            piv = self.lu[1]
+            s *= (-1) ** int(np.sum(piv != np.arange(piv.size)))
+        return s
+
+
+def _perm_parity(p) -> int:
+    p = np.asarray(p)
+    seen = np.zeros(p.size, dtype=bool)
+    parity = 0
+    for i in range(p.size):
+        if not seen[i]:
+            j, length = i, 0
+            while not seen[j]:
+                seen[j] = True
+                j = p[j]
+                length += 1
+            parity += length - 1
+    return -1 if parity % 2 else 1
+
+
+def _noise_floor(system, x, scale, energy=None, seed=0):
+    """Relative residual change under a perturbation of x at the rounding level."""
+    rng = np.random.default_rng(seed)
+    F0 = system.residual(x, energy)
+    x1 = x * (1 + _EPS * rng.choice([-1.0, 1.0], size=x.size))
+    F1 = system.residual(x1, energy)
+    return system.scaled_parts(F1 - F0, system.curve(x), scale)
+
+
+def _at_floor(system, x, F, scale, tol, floor):
+    """Every part of the residual is below ``max(tol, 100 x its round-off floor)``."""
+    parts = system.scaled_parts(F, system.curve(x), scale)
+    return bool(np.all(parts <= np.maximum(tol, 100 * floor)))
+
+
+def _check_curve(energy, curve):
+    from qsa.energies.base import Energy
+
+    if not isinstance(curve, Curve):
+        raise ValueError(f"curve must be a qsa Curve, got {type(curve).__name__}")
+    if not isinstance(energy, Energy):
+        raise ValueError(f"energy must be a qsa Energy, got {type(energy).__name__}")
+
+
+def _check_positive(value, name):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a positive number, got {value!r}") from None
+    if not np.isfinite(v) or v <= 0:
+        raise ValueError(f"{name} must be a positive number, got {value!r}")
+    return v
+
+
+def _check_maxiter(maxiter):
+    if isinstance(maxiter, bool) or not isinstance(maxiter, (int, np.integer)) or maxiter < 0:
+        raise ValueError(f"maxiter must be a non-negative integer, got {maxiter!r}")
+    return int(maxiter)
+
+
+def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True):
+    """Damped Newton on ``system.residual``; returns ``(x, status, history, n_iter, floor)``.
+
+    The full step is taken whenever it decreases the merit :meth:`EquilibriumSystem.merit`
+    (a smooth 2-norm, for which the Newton direction is a descent direction);
+    otherwise the step is halved (at most 10 times). Never raises for non-convergence:
+    the best state is returned with a status code (see ``STATUS_MESSAGES``).
+    """
+    x = np.array(x0, dtype=float)
+    scale = residual_scale(system.energy if energy is None else energy, system.curve(x))
+    F = system.residual(x, energy)
+    r = system.scaled_norm(F, system.curve(x), scale)
+    m = system.merit(F, system.curve(x), scale)
+    history = [r]
+    best = (r, x.copy())
+    status = 2
+    floor = None
+    n_iter = 0
+    for it in range(maxiter + 1):
+        if not np.isfinite(r):
+            status = 3
+            break
+        if r <= tol:
+            status = 0
+            break
+        if it == maxiter:
+            status = 2
+            break
+        try:
+            fac = _Factor(system.jacobian(x, energy))
+            if fac.singular:
+                status = 3
+                break
+            dx = -fac.solve(F)
+        except (RuntimeError, np.linalg.LinAlgError, ValueError):
+            status = 3
+            break
+        if not np.all(np.isfinite(dx)):
+            status = 3
+            break
+        t = 1.0
+        accepted = False
+        for _ in range(11 if line_search else 1):
+            xt = x + t * dx
+            if xt[system.N] > 0:
+                try:
+                    Ft = system.residual(xt, energy)
+                    ct = system.curve(xt)
+                    rt = system.scaled_norm(Ft, ct, scale)
+                    mt = system.merit(Ft, ct, scale)
+                except ValueError:
+                    rt = mt = np.inf
+                if np.isfinite(rt) and (mt < (1 - 1e-4 * t) * m or rt < r or not line_search):
+                    accepted = True
+                    break
+            t *= 0.5
+        n_iter += 1
+        if not accepted:
+            # At the round-off floor no step can decrease the residual any more.
+            floor = _noise_floor(system, x, scale, energy)
+            status = 1 if _at_floor(system, x, F, scale, tol, floor) else 4
+            break
+        x, F, r, m = xt, Ft, rt, mt
+        history.append(r)
+        if r < best[0]:
+            best = (r, x.copy())
+        # Stagnation at the round-off floor: a step that no longer gains much.
+        if len(history) >= 3 and r > 0.5 * history[-2]:
+            floor = _noise_floor(system, x, scale, energy)
+            if _at_floor(system, x, F, scale, tol, floor):
+                status = 1 if r > tol else 0
+                break
+    if best[0] < r:
+        x, r = best[1], best[0]
+    if floor is None:
+        floor = _noise_floor(system, x, scale, energy)
+    return x, status, np.array(history), n_iter, float(np.max(floor))
+
+
+def _params(energy, curve, Lambda):
+    params = {"L": curve.length()}
+    for t in energy.terms():
+        for name in ("alpha", "kstar", "eps", "beta", "L_star"):
+            v = getattr(t, name, None)
+            if isinstance(v, (int, float)) and name not in params:
+                params[name] = float(v)
+    if "beta" in params and "L_star" in params:
+        params["nu2"] = params["beta"] * (params["L"] - params["L_star"])
+    params["nu1"] = float(-Lambda[2])
+    return params
+
+
+def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> PolishResult:
+    """Polish an approximate equilibrium by Newton's method on ``V^n = 0`` with closure.
+
+    Parameters
+    ----------
+    energy : Energy
+        E.g. ``Faceting(alpha, kstar) + Perimeter(beta, L_star)``.
+    curve : Curve
+        Initial guess (an N-pulse, a splice, a relaxed flow state...). If its ``g``
+        is not constant it is first reparameterized to constant ``g`` (same base
+        point, same base angle).
+    tol : float
+        Target for the relative residual ``max(max|V^n| / scale, |C(U)| / L)``,
+        ``scale`` = the largest single term of ``V^n`` (:func:`residual_scale`).
+    maxiter : int
+        Maximum number of Newton steps.
+    line_search : bool
+        Halve the step until the residual decreases (default True).
+
+    Returns
+    -------
+    PolishResult
+        An :class:`Equilibrium` (``kind="polished"``) with ``residual = max|V^n|``,
+        ``closure = |C(U)|``, ``multipliers`` (Lambda, by projection of
+        ``nabla_I E`` on ``span Psi`` in ``<f, h> = int f h dsigma``), ``params``
+        (``L``, the energy's parameters, ``nu1 = -Lambda_3``, ``nu2 = beta (L - L*)``
+        when a perimeter term is present), plus ``status``, ``n_iter``, ``history``
+        (relative residual per iteration), ``unfolding``, ``noise_floor``. A solve
+        that does not converge returns ``success=False`` with the best state found.
+
+    Raises
+    ------
+    ValueError
+        ``energy``/``curve`` of the wrong type, ``tol <= 0`` or ``maxiter < 0``.
+
+    Notes
+    -----
+    The square system, its gauge and its exact Jacobian are described in the
+    module docstring (e:L2grad, e:Abs-CP, e:C1, e:C2). On a finite-difference
+    grid the Newton matrix is sparse with four dense borders (sparse LU, O(N)
+    per step); on a Fourier grid it is dense.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> from qsa.energies import Faceting, Perimeter
+    >>> from qsa.equilibria import npulse
+    >>> eq = npulse(3, 0.15, grid=Fourier(127))
+    >>> res = polish(eq.energy, eq.curve)
+    >>> bool(res.success), res.residual < 1e-8 * res.residual_scale
+    (True, True)
+    """
+    _check_curve(energy, curve)
+    tol = _check_positive(tol, "tol")
+    maxiter = _check_maxiter(maxiter)
+    guess = _equal_arclength(curve)
+    system = EquilibriumSystem(energy, guess)
+    x, status, history, n_iter, floor = newton_solve(system, system.pack(guess), tol, maxiter,
+                                                     line_search=line_search)
+    return _result(energy, system, x, status, history, n_iter, floor, curve is not guess)
+
+
+def _result(energy, system, x, status, history, n_iter, floor, reparameterized=False):
+    c = system.curve(x)
+    V = normal_velocity(energy, c)
+    scale = residual_scale(energy, c)
+    res = float(np.max(np.abs(V)))
+    clo = float(np.linalg.norm(c.closure()))
+    Lambda = multipliers(energy, c)
+    success = status in (0, 1)
+    msg = (f"polish: {STATUS_MESSAGES[status]}; {n_iter} Newton steps, max|V^n| = {res:.2e} "
+           f"({res / scale:.1e} of the largest term), |C(U)| = {clo:.2e}, "
+           f"round-off floor ~{floor:.1e}")
+    if reparameterized:
+        msg += "; the guess was reparameterized to constant g"
+    return PolishResult(c, energy, _params(energy, c, Lambda), Lambda, res, clo, scale,
+                        "polished", success, msg, {}, status, n_iter, np.asarray(history),
+                        np.array(x[system.N + 1:], dtype=float).copy()
+                        if system.n_unfold == 3 else
+                        np.concatenate([x[system.N + 1:], [0.0]]), float(floor))

@@ -1,0 +1,165 @@
+"""Continuation: folds of the circle branch (exact) and of the 3-pulse branch (semi-analytic)."""
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+from qsa import FiniteDifference, Fourier
+from qsa.energies import Faceting, Perimeter
+from qsa.equilibria import circle, npulse
+from qsa.equilibria.continuation import Branch, continuation
+
+K, BETA, ALPHA = 5.0, 5.0, 0.1
+
+
+def factory(alpha=ALPHA):
+    return lambda L_star: Faceting(alpha, K) + Perimeter(BETA, L_star)
+
+
+def circle_L_star(k):
+    """L* of the circle of curvature k: beta (2 pi R - L*) = k W'(k) - W(k)."""
+    return 2 * np.pi / k - k**2 * (k - K) * (3 * k - K) / (4 * BETA)
+
+
+def circle_fold():
+    """dL*/dR = 0  <=>  k^3 W''(k) = -2 pi beta (first fold, k in (1.5, 2))."""
+    k = brentq(lambda k: k**3 * 0.5 * (6 * k * k - 6 * K * k + K * K) + 2 * np.pi * BETA,
+               1.5, 2.0, xtol=1e-15)
+    return k, circle_L_star(k)
+
+
+def test_circle_branch_passes_the_fold_and_locates_it():
+    eq = circle(0.77, ALPHA, grid=Fourier(17), kstar=K, beta=BETA)
+    Ls0 = eq.params["L_star"]
+    b = continuation(factory(), eq.curve, "L_star", (Ls0, 3.0, -0.1))
+    assert isinstance(b, Branch) and b.success, b.message
+    kf, Lf = circle_fold()
+    assert len(b.folds) == 1
+    fold = b.folds[0]
+    assert fold.param == pytest.approx(Lf, abs=1e-9)
+    assert fold.L == pytest.approx(2 * np.pi / kf, abs=1e-6)
+    assert "fold" in b.message and f"{Lf:.6f}"[:6] in b.message
+    # passed it: p goes down, turns, and comes back up past the start
+    v = b.values
+    i = fold.index
+    assert np.all(np.diff(v[: i + 1]) < 0) and np.all(np.diff(v[i + 1:]) > 0)
+    assert v[-1] > Ls0
+    # dp/ds and det F_x change sign at the fold only
+    dp = np.array([p.dp_ds for p in b.points])
+    assert np.all(dp[: i + 1] < 0) and np.all(dp[i + 1:] > 0)
+    det = np.array([p.det_sign for p in b.points])
+    assert det[i] != det[i + 1] and len(set(det[: i + 1])) == 1 and len(set(det[i + 1:])) == 1
+    assert b.branch_points == ()
+    # every point is a circle on the exact branch L*(k)
+    for p in b.points:
+        k = p.curve.kappa
+        assert np.ptp(k) < 1e-10
+        assert p.param == pytest.approx(circle_L_star(k[0]), abs=1e-9)
+        assert p.equilibrium.residual <= 1e-9 * max(p.equilibrium.residual_scale, 1.0)
+
+
+def test_natural_continuation_follows_circles_and_stops_at_fold():
+    eq = circle(0.77, ALPHA, grid=Fourier(17), kstar=K, beta=BETA)
+    Ls0 = eq.params["L_star"]
+    b = continuation(factory(), eq.curve, "L_star", (Ls0, 3.5, -0.1), method="natural")
+    _, Lf = circle_fold()
+    assert not b.success and b.status == 3 and "fold" in b.message
+    assert b.values[-1] >= Lf > b.values[-1] - 0.1 - 1e-12
+    for p in b.points:
+        assert p.param == pytest.approx(circle_L_star(p.curve.kappa[0]), abs=1e-9)
+    # below the fold-free range it covers everything
+    b2 = continuation(factory(), eq.curve, "L_star", np.linspace(Ls0, 4.0, 5), method="natural")
+    assert b2.success and np.allclose(b2.values, np.linspace(Ls0, 4.0, 5))
+
+
+def test_three_pulse_branch_fold_matches_semi_analytic():
+    """3-pulses exist for every nu1 in a range; L*(nu1) has a minimum = a fold in L*."""
+    alpha = 0.2
+    res = minimize_scalar(
+        lambda nu1: npulse(3, alpha, nu1=nu1, grid=Fourier(33), kstar=K).params["L_star"],
+        bracket=(0.06, 0.09, 0.12), tol=1e-10)
+    eq = npulse(3, alpha, grid=Fourier(129), kstar=K, beta=BETA)
+    Ls0 = eq.params["L_star"]
+    b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02), max_steps=20)
+    assert b.success, b.message
+    assert len(b.folds) == 1
+    assert b.folds[0].param == pytest.approx(res.fun, abs=1e-9)
+    # each point is a 3-pulse: nu1 = -Lambda_3 reproduces its L* semi-analytically
+    for p in b.points[1:4]:
+        nu1 = -p.equilibrium.multipliers[2]
+        ref = npulse(3, alpha, nu1=nu1, grid=Fourier(33), kstar=K, beta=BETA)
+        assert p.param == pytest.approx(ref.params["L_star"], abs=1e-8)
+
+
+def test_fd_fold_converges_at_order_two():
+    alpha = 0.2
+    ref = minimize_scalar(
+        lambda nu1: npulse(3, alpha, nu1=nu1, grid=Fourier(33), kstar=K).params["L_star"],
+        bracket=(0.06, 0.09, 0.12), tol=1e-10).fun
+    errs = []
+    for N in (150, 300):
+        eq = npulse(3, alpha, grid=FiniteDifference(N), kstar=K, beta=BETA)
+        Ls0 = eq.params["L_star"]
+        b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02),
+                         max_steps=20)
+        assert len(b.folds) == 1
+        errs.append(abs(b.folds[0].param - ref))
+    assert np.log2(errs[0] / errs[1]) == pytest.approx(2.0, abs=0.15)
+
+
+def test_stability_hook_is_called_at_every_point():
+    calls = []
+
+    def hook(energy, curve):
+        calls.append(energy.terms()[1].L_star)
+        # analytic k = 0 eigenvalue of the circle: -k (k^3 W''(k) + 2 pi beta)
+        k = curve.kappa[0]
+        lam0 = -k * (k**3 * 0.5 * (6 * k * k - 6 * K * k + K * K) + 2 * np.pi * BETA)
+        return int(lam0 > 0)
+
+    eq = circle(0.77, ALPHA, grid=Fourier(17), kstar=K, beta=BETA)
+    b = continuation(factory(), eq.curve, "L_star", (eq.params["L_star"], 3.0, -0.1),
+                     stability=hook)
+    nu = b.n_unstable
+    assert nu is not None and len(calls) == len(b.points)
+    i = b.folds[0].index
+    # the k = 0 mode changes stability exactly at the fold
+    assert np.all(nu[: i + 1] == 0) and np.all(nu[i + 1:] == 1)
+    assert np.allclose(calls, b.values)
+
+
+def test_stability_true_uses_spectra_or_says_it_is_missing():
+    import qsa.spectra
+
+    eq = circle(0.77, ALPHA, grid=Fourier(17), kstar=K, beta=BETA)
+    args = (factory(), eq.curve, "L_star", (eq.params["L_star"], 3.0, -0.1))
+    if not hasattr(qsa.spectra, "spectrum"):
+        with pytest.raises(ValueError, match="spectra"):
+            continuation(*args, stability=True)
+        return
+    b = continuation(*args, stability=True)
+    # circle spectrum (MATH.md section 4): mode k >= 2 (double) is unstable when
+    # alpha^2 k^2 k0^2 + W''(k0) < 0, mode 0 when k0^3 W''(k0) + 2 pi beta < 0
+    for p in b.points:
+        k0 = p.curve.kappa[0]
+        W2 = 0.5 * (6 * k0**2 - 6 * K * k0 + K**2)
+        ks = np.arange(2, 9)  # resolved by Fourier(17)
+        expected = 2 * int(np.sum(ALPHA**2 * ks**2 * k0**2 + W2 < 0))
+        expected += int(k0**3 * W2 + 2 * np.pi * BETA < 0)
+        assert p.n_unstable == expected
+
+
+def test_bad_input():
+    eq = circle(0.77, ALPHA, grid=Fourier(17), kstar=K, beta=BETA)
+    with pytest.raises(ValueError, match="energy_factory"):
+        continuation(None, eq.curve, "L_star", (4.0, 3.0, -0.1))
+    with pytest.raises(ValueError, match="method"):
+        continuation(factory(), eq.curve, "L_star", (4.0, 3.0, -0.1), method="secant")
+    with pytest.raises(ValueError, match="step"):
+        continuation(factory(), eq.curve, "L_star", (4.0, 3.0, 0.1))
+    with pytest.raises(ValueError, match="monotone"):
+        continuation(factory(), eq.curve, "L_star", [4.0, 3.0, 3.5])
+    with pytest.raises(ValueError, match="stability"):
+        continuation(factory(), eq.curve, "L_star", (4.0, 3.0, -0.1), stability="yes")
+    with pytest.raises(ValueError, match="not close enough"):
+        continuation(factory(), eq.curve, "L_star", (1.0, 3.0, 0.1), maxiter=0)
