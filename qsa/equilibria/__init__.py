@@ -4,8 +4,9 @@
 the N-fold symmetric faceted equilibrium; ``splice(positions, alpha, length=...)`` and
 ``splice_polygon(angles, facets, alpha)`` -> 2N-front quasi-equilibria closed to 1e-12;
 ``circle(R, alpha, ...)``; ``polish(energy, curve)`` (Newton to the exact discrete
-equilibrium) and ``continuation(...)`` (natural / pseudo-arclength, folds). All but the front return :class:`Equilibrium`. Conventions
-and the corrected signs follow MATH.md section 5.
+equilibrium) and ``continuation(...)`` (natural / pseudo-arclength, folds). All but
+the front return :class:`Equilibrium`. Conventions and the corrected signs follow
+MATH.md section 5.
 """
 
 from qsa.equilibria.continuation import Branch, BranchPoint, Fold, continuation
