@@ -16,7 +16,7 @@ import sys
 from qsa._version import __version__
 
 #: Subcommand modules under ``qsa.commands``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["demo", "equilibrium"]
+SUBCOMMANDS = ["demo", "equilibrium", "spectrum", "flow", "reproduce", "sweep"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -27,7 +27,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"qsa {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMANDS:
-        importlib.import_module(f"qsa.commands.{name}").add_parser(sub)
+        try:
+            module = importlib.import_module(f"qsa.commands.{name}")
+        except ModuleNotFoundError as exc:  # a subcommand not installed in this build
+            if exc.name != f"qsa.commands.{name}":
+                raise
+            continue
+        module.add_parser(sub)
     return parser
 
 

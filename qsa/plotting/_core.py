@@ -1,4 +1,4 @@
-"""All of qsa's figures (the only module that imports matplotlib).
+"""Curves and curvature profiles; shared figure helpers.
 
 Figures are built with ``matplotlib.figure.Figure`` and the Agg canvas, so no
 global backend is switched and nothing needs a display; pass ``ax`` to draw into
