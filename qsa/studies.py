@@ -10,6 +10,12 @@ picklable by reference, so they run on a process pool or a Dask cluster.
 ``spectrum_study``
     Its spectrum (linearization ``-MM-dagger L_Lambda``, MATH.md section 4;
     :mod:`qsa.spectra`): unstable count, kernel dimension, leading eigenvalues.
+``circle_spectrum_study``
+    The circle's spectrum against the closed form of MATH.md section 4
+    (:func:`circle_eigenvalues`), on Fourier or finite-difference grids.
+``splice_spectrum_study``
+    The small eigenvalues of a heteroclinic splice (a rounded polygon) and the
+    predicted scale ``exp(-kstar d_min / (sqrt(2) alpha))`` (MATH.md section 5).
 
 :data:`STUDIES` maps the names used by ``qsa sweep NAME`` to the functions.
 """
@@ -18,7 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["npulse_study", "spectrum_study", "STUDIES"]
+__all__ = ["npulse_study", "spectrum_study", "circle_spectrum_study", "circle_eigenvalues",
+           "splice_spectrum_study", "STUDIES"]
 
 
 def _grid(N, fd):
@@ -91,23 +98,33 @@ def spectrum_study(n_pulses=3, alpha=0.1, kstar=5.0, beta=5.0, nu1=0.0, N=None, 
     -------
     dict
         Scalars ``n_nodes, converged, residual, relative_residual, n_unstable, n_kernel,
-        lambda_0..`` (largest first) and the kernel-report numbers ``kernel_*``; array
+        lambda_0..`` (largest first), ``spectrum_status`` (1: not an equilibrium to
+        the spectrum's tolerance) and the kernel-report numbers ``kernel_*``; array
         ``eigenvalues`` (all, largest first).
     """
-    from qsa import spectra
-
     eq = _npulse(n_pulses, alpha, kstar, beta, nu1, N, fd)
-    sp = spectra.spectrum(eq.energy, eq.curve)
+    sp = _spectrum(eq)
     ev = np.sort(np.real(np.asarray(sp.eigenvalues)))[::-1]
     out = {"n_nodes": int(eq.curve.N), "converged": bool(eq.success),
            "residual": float(eq.residual), "relative_residual": float(eq.relative_residual),
            "n_unstable": int(sp.n_unstable),
-           "n_kernel": int(sp.n_kernel)}
+           "n_kernel": int(sp.n_kernel), "spectrum_status": int(sp.status)}
     for i in range(int(n_leading)):
         out[f"lambda_{i}"] = float(ev[i]) if i < ev.size else float("nan")
     out.update(_kernel_columns(sp.kernel))
     out["eigenvalues"] = ev
     return out
+
+
+def _spectrum(eq):
+    """Spectrum at an (quasi-)equilibrium; "not an equilibrium" goes in ``status``, quietly."""
+    import warnings
+
+    from qsa import spectra
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", spectra.NotEquilibriumWarning)
+        return spectra.spectrum(eq.energy, eq.curve)
 
 
 def _kernel_columns(report) -> dict:
@@ -123,5 +140,120 @@ def _kernel_columns(report) -> dict:
     return out
 
 
+def circle_eigenvalues(R, alpha, kstar=5.0, beta=5.0, kmax=8, well=None):
+    """Closed-form eigenvalues ``lambda_k`` of ``J`` on the faceting circle, ``k = 0..kmax``.
+
+    ``lambda_k = -((k^2 - 1)^2 / R^4) (alpha^2 k^2 / R^2 + W''(1/R)) - delta_k0 2 pi beta / R``
+    (MATH.md section 4): mode ``cos k theta``; ``k = 1`` (translations) is 0 and every
+    ``k >= 1`` is double.
+
+    Returns
+    -------
+    ndarray, shape (kmax + 1,)
+    """
+    from qsa.energies import DoubleWell
+
+    well = DoubleWell(kstar) if well is None else well
+    k = np.arange(int(kmax) + 1, dtype=float)
+    lam = -((k**2 - 1) ** 2 / R**4) * (alpha**2 * k**2 / R**2 + float(well.d2W(1.0 / R)))
+    lam[0] -= 2 * np.pi * beta / R
+    return lam
+
+
+def circle_spectrum_study(R=1.0, alpha=0.1, kstar=5.0, beta=5.0, N=33, fd=False, kmax=6):
+    """The circle equilibrium's spectrum against :func:`circle_eigenvalues`.
+
+    Each closed-form eigenvalue of the modes ``k <= kmax`` (doubles included) is compared
+    with the nearest computed one; the expected unstable count uses every mode the grid
+    carries (``k <= (N - 1) / 2``).
+
+    Returns
+    -------
+    dict
+        ``max_rel_error`` (over the non-zero exact eigenvalues), ``kernel_error``
+        (largest computed eigenvalue where the exact one is 0), ``n_unstable``,
+        ``expected_unstable``, ``n_kernel``; arrays ``eigenvalues`` (the nearest computed
+        ones) and ``exact`` (modes 0, 1..kmax, 1..kmax).
+
+    Examples
+    --------
+    >>> r = circle_spectrum_study(N=33)
+    >>> bool(r["max_rel_error"] < 1e-8), r["n_unstable"] == r["expected_unstable"]
+    (True, True)
+    """
+    from qsa import spectra
+    from qsa.equilibria import circle
+
+    eq = circle(R, alpha, grid=_grid(N, fd), beta=beta, kstar=kstar)
+    if 2 * int(kmax) + 1 > eq.curve.N:
+        raise ValueError(f"kmax={kmax} needs N >= {2 * int(kmax) + 1}")
+    lam = circle_eigenvalues(R, alpha, kstar, beta, kmax)
+    exact = np.concatenate([lam, lam[1:]])
+    sp = spectra.spectrum(eq.energy, eq.curve)
+    ev = np.real(np.asarray(sp.eigenvalues))
+    # each exact eigenvalue against the nearest computed one
+    nearest = ev[np.argmin(np.abs(ev[None, :] - exact[:, None]), axis=1)]
+    nz = exact != 0
+    lam_all = circle_eigenvalues(R, alpha, kstar, beta, (eq.curve.N - 1) // 2)
+    return {"n_nodes": int(eq.curve.N),
+            "max_rel_error": float(np.max(np.abs(nearest[nz] - exact[nz]) / np.abs(exact[nz]))),
+            "kernel_error": float(np.max(np.abs(nearest[~nz]))),
+            "n_unstable": int(sp.n_unstable),
+            "expected_unstable": int(lam_all[0] > 0) + 2 * int(np.sum(lam_all[2:] > 0)),
+            "n_kernel": int(sp.n_kernel), "eigenvalues": nearest, "exact": exact}
+
+
+def _floats(text, name):
+    try:
+        vals = [float(v) for v in str(text).split(",")]
+    except ValueError:
+        raise ValueError(f"{name} must be comma-separated numbers, got {text!r}") from None
+    return np.array(vals)
+
+
+def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", kstar=5.0,
+                          beta=5.0, N=None):
+    """Small eigenvalues of a splice quasi-equilibrium shaped like a rounded polygon.
+
+    Parameters
+    ----------
+    alpha, kstar, beta : float
+    angles, facets : str
+        Comma-separated exterior corner angles (degrees, sum 360) and facet lengths
+        (:func:`qsa.equilibria.splice_polygon`).
+    N : int, optional
+        Fourier size (default: resolving the fronts).
+
+    Returns
+    -------
+    dict
+        ``n_corners``, ``d_min`` (smallest front spacing), ``delta = exp(-kstar d_min /
+        (sqrt(2) alpha))``, ``relative_residual``, ``n_unstable``, ``kernel_tol``,
+        ``spectrum_status`` (1: a quasi-equilibrium beyond the spectrum's tolerance), the
+        ``2 n_corners - 1`` slow eigenvalues as ``slow_0..`` (largest first; 3 of them
+        the rigid motions, the others front motions), ``fast`` (the next one);
+        array ``eigenvalues``.
+    """
+    from qsa.equilibria import splice_polygon
+
+    ang = np.radians(_floats(angles, "angles"))
+    fac = _floats(facets, "facets")
+    eq = splice_polygon(ang, fac, alpha, grid=_grid(N, False), kstar=kstar, beta=beta)
+    sp = _spectrum(eq)
+    ev = np.sort(np.real(np.asarray(sp.eigenvalues)))[::-1]
+    n = len(ang)
+    d_min = float(eq.params["d_min"])
+    out = {"n_nodes": int(eq.curve.N), "n_corners": n, "d_min": d_min,
+           "delta": float(np.exp(-kstar * d_min / (np.sqrt(2) * alpha))),
+           "relative_residual": float(eq.relative_residual), "n_unstable": int(sp.n_unstable),
+           "kernel_tol": float(sp.kernel_tol), "spectrum_status": int(sp.status)}
+    for i in range(2 * n - 1):
+        out[f"slow_{i}"] = float(ev[i])
+    out["fast"] = float(ev[2 * n - 1])
+    out["eigenvalues"] = ev
+    return out
+
+
 #: Names of ``qsa sweep NAME`` -> study functions.
-STUDIES = {"npulse": npulse_study, "spectrum": spectrum_study}
+STUDIES = {"npulse": npulse_study, "spectrum": spectrum_study,
+           "circle-spectrum": circle_spectrum_study, "splice-spectrum": splice_spectrum_study}

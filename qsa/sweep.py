@@ -513,7 +513,9 @@ def run_sweep(study, params, out, executor=None, workers=None, progress=None,
         Where points run; not shut down here. Default: a ``ProcessPoolExecutor`` with
         ``workers`` processes (``workers=1``: in this process, :class:`SerialExecutor`).
     workers : int, optional
-        Size of the default process pool (default ``os.cpu_count()``).
+        Size of the default process pool (default ``os.cpu_count()``). Its workers are
+        spawned (fresh interpreters), so a script that runs a sweep on it needs the
+        usual ``if __name__ == "__main__":`` guard.
     blas_threads : int or None
         BLAS/OpenMP threads of each worker of the default pool (environment variables
         set when the spawned workers start); ``None`` leaves the environment alone.
