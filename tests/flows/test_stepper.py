@@ -13,17 +13,12 @@ from qsa.flows.stepper import (
     factorize,
     interleaved_ordering,
 )
-from qsa.resample import resample_closed
+from tests.flows.test_dae import paper_curve
 
 PAPER_CHA = dict(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
 
 
-def paper_xy(N):
-    th = 2 * np.pi * np.arange(1000) / 1000
-    r = 1 + 0.35 * np.cos(3 * th)
-    x, y, _ = resample_closed(r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th), N,
-                              method="chord")
-    return x, y
+paper_xy = paper_curve  # equal-chord nodes of the appendix example
 
 
 def test_interleaved_ordering_is_node_major():
