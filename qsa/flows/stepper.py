@@ -28,7 +28,8 @@ Step-size control (``method="be"``, the paper's): a *pass* takes two steps of
 size ``k`` and, for the error estimate, one step of size ``2k`` from the same
 state; it is accepted when ``max |X_k,k - X_2k|`` over the node positions is at
 most ``tol``, advancing physical time by ``2k``; the next ``k`` is
-``k * min(1.3, 0.8 sqrt(tol / err))``. A failed Newton solve halves the step.
+``k * min(1.3, 0.8 sqrt(tol / err))``. A rejected pass or a failed Newton solve
+halves the step (as the paper's code does).
 
 NOTE: the paper's code advances its clock by ``k`` per accepted pass while the
 state advances by ``2k`` (MATH.md section 7); here the clock is physical time.
@@ -504,4 +505,5 @@ class Integrator:
                 self.h = h_next
                 return "accepted"
             self.n_rejected += 1
-            self.h = h * max(factor, 0.1)
+            # the paper's code halves a rejected pass; BDF2 uses the usual factor
+            self.h = 0.5 * h if not bdf else h * max(factor, 0.2)
