@@ -57,10 +57,11 @@ from qsa.spectra.linearization import (
     linearization,
     normal_operator,
     scaled_operator,
+    symmetric_form,
 )
 
 __all__ = ["Spectrum", "KernelReport", "spectrum", "kernel_report", "NotEquilibriumWarning",
-           "second_resolution", "operator_norm"]
+           "second_resolution", "operator_norm", "small_cluster"]
 
 _EPS = np.finfo(float).eps
 
@@ -163,6 +164,16 @@ class Spectrum:
         Number of eigenvalues with ``|lambda| <= kernel_tol``.
     kernel_tol : float
         See the module docstring.
+    n_small : int
+        Size of the cluster of small eigenvalues: the ``m >= max(n_kernel, 1)``
+        maximising ``gap_ratio = |lambda|_(m) / |lambda|_(m-1)`` over the ``|lambda|``
+        sorted increasingly (floored at the round-off level ``10 eps |J|``), among
+        the smallest ``N // 4``. For a splice of 2N fronts (N corners) well apart,
+        ``n_small = 2N - 1``: the 2N front positions less the total-turning
+        constraint, i.e. the 2N - 4 free splice parameters (MATH.md section 5) plus
+        the 3 rigid motions; they are small like the residuals, the rest O(1).
+    gap_ratio : float
+        The ratio at ``n_small`` (how well the cluster is separated).
     kernel : KernelReport
     spurious : ndarray
         Eigenvalues rejected by the two-resolution check (empty if it was not run).
@@ -192,6 +203,8 @@ class Spectrum:
     n_unstable: int
     n_kernel: int
     kernel_tol: float
+    n_small: int
+    gap_ratio: float
     kernel: KernelReport
     spurious: np.ndarray
     drift: np.ndarray
@@ -227,7 +240,8 @@ class Spectrum:
             "gauge": self.gauge, "method": self.method, "N": self.N, "N2": self.N2,
             "sigma": self.sigma, "n_eigenvalues": int(self.eigenvalues.size),
             "eigenvalues": num(ev), "n_unstable": self.n_unstable, "n_kernel": self.n_kernel,
-            "kernel_tol": self.kernel_tol, "n_spurious": int(self.spurious.size),
+            "kernel_tol": self.kernel_tol, "n_small": self.n_small,
+            "gap_ratio": self.gap_ratio, "n_spurious": int(self.spurious.size),
             "max_imag": self.max_imag, "asymmetry": self.asymmetry,
             "multipliers": [float(x) for x in self.multipliers],
             "projection_residual": self.projection_residual,
@@ -393,7 +407,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
     tol_auto, defect = _kernel_tolerance(curve, J, normJ, basis)
     tol = tol_auto if kernel_tol is None else _positive(kernel_tol, "kernel_tol")
     if eigenvalues is None:
-        S = normal_operator(energy, curve, symmetric=True, lagrange=LH)
+        S = symmetric_form(curve, J)
         if not curve.grid.sparse or curve.N <= 2000:
             eigenvalues = sla.eigvalsh(to_dense(S))
         else:
@@ -469,12 +483,15 @@ def second_resolution(grid, factor=1.5):
     return FiniteDifference(N2)
 
 
-def _solve(energy, curve, gauge, k, sigma, LH):
-    """Eigenvalues/vectors in the gauge; returns (vals, vecs, weights, max_imag, asym, normA)."""
+def _solve(energy, curve, gauge, k, sigma, LH, J=None, vectors=True):
+    """Eigenvalues/vectors in the gauge; returns (vals, vecs, weights, max_imag, asym)."""
     w = curve.dsigma
     if gauge == "normal":
-        S = normal_operator(energy, curve, symmetric=True, lagrange=LH)
-        asym = _asymmetry(energy, curve, LH)
+        J = normal_operator(energy, curve, lagrange=LH) if J is None else J
+        S = symmetric_form(curve, J)
+        asym = _asymmetry(curve, J)
+        if k is None and not vectors:
+            return sla.eigvalsh(to_dense(S)), None, w, 0.0, asym
         if k is None:
             vals, Y = sla.eigh(to_dense(S))
         else:
@@ -487,7 +504,9 @@ def _solve(energy, curve, gauge, k, sigma, LH):
     else:
         A = linearization(energy, curve, gauge=gauge, lagrange=LH)
         wts = np.concatenate([w, w])
-    if k is None:
+    if k is None and not vectors:
+        vals, vecs = sla.eigvals(to_dense(A)), None
+    elif k is None:
         vals, vecs = sla.eig(to_dense(A))
     else:
         vals, vecs = _shift_invert(A, k, sigma, symmetric=False)
@@ -495,15 +514,17 @@ def _solve(energy, curve, gauge, k, sigma, LH):
     max_imag = float(np.max(np.abs(vals.imag)) / scale) if scale > 0 else 0.0
     if gauge != "paper":
         vals = vals.real
-        vecs = vecs.real if np.isrealobj(vals) else vecs
+    if vecs is None:
+        return vals, None, wts, max_imag, np.nan
+    if gauge != "paper":
+        vecs = vecs.real
     norms = np.sqrt(np.sum(wts[:, None] * np.abs(vecs) ** 2, axis=0))
     vecs = vecs / np.where(norms > 0, norms, 1.0)
     return vals, vecs, wts, max_imag, np.nan
 
 
-def _asymmetry(energy, curve, LH, probes=3):
-    """``max |W J x - (W J)^T x| / (|W J| |x|)`` over random probes (Euclidean)."""
-    J = normal_operator(energy, curve, lagrange=LH)
+def _asymmetry(curve, J, probes=3):
+    """``max |W J x - (W J)^T x| / |W J x|`` over random probes (Euclidean)."""
     w = curve.dsigma
     rng = np.random.default_rng(2)
     worst = 0.0
@@ -529,6 +550,26 @@ def _match_drift(vals, vals2, tol):
     dist = np.array([np.min(np.abs(vals2 - lam)) for lam in vals])
     drift = dist / np.maximum(np.abs(vals), 1e-300)
     return drift, dist
+
+
+def small_cluster(eigenvalues, n_kernel=0, floor=0.0, max_size=None):
+    """``(m, ratio)``: size of the cluster of small eigenvalues and its separation.
+
+    ``|lambda|`` sorted increasingly and floored at ``floor``; ``m`` maximises
+    ``|lambda|_(m) / |lambda|_(m-1)`` over ``max(n_kernel, 1) <= m <= max_size``
+    (default: half the number of eigenvalues). See :class:`Spectrum` ``n_small``.
+    """
+    a = np.sort(np.abs(np.asarray(eigenvalues)))
+    if a.size < 2:
+        return int(a.size), np.nan
+    a = np.maximum(a, max(floor, 1e-300))
+    hi = min(a.size - 1, max_size if max_size is not None else a.size // 2)
+    lo = max(int(n_kernel), 1)
+    if lo > hi:
+        return int(min(lo, a.size)), np.nan
+    ratios = a[lo: hi + 1] / a[lo - 1: hi]
+    j = int(np.argmax(ratios))
+    return lo + j, float(ratios[j])
 
 
 def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel_tol=None,
@@ -623,12 +664,13 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         notes.append(text)
 
     try:
-        vals, vecs, _, max_imag, asym = _solve(energy, curve, gauge, k, sigma, LH)
+        vals, vecs, _, max_imag, asym = _solve(energy, curve, gauge, k, sigma, LH, J)
     except (np.linalg.LinAlgError, spla.ArpackError, spla.ArpackNoConvergence,
             RuntimeError) as exc:
         kr = _build_kernel_report(energy, curve, LH, J, normJ, None, tol, basis, defect)
         empty = np.array([])
-        return Spectrum(empty, np.zeros((curve.N, 0)), 0, 0, float(tol), kr, empty, empty,
+        return Spectrum(empty, np.zeros((curve.N, 0)), 0, 0, float(tol), 0, np.nan, kr, empty,
+                        empty,
                         gauge, "dense" if k is None else "shift-invert", sigma, curve.N, None,
                         np.nan, np.nan, LH.multipliers, LH.projection_residual,
                         LH.relative_residual, False, 2, f"eigen-solver failed: {exc}")
@@ -647,7 +689,7 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
                    tol)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotEquilibriumWarning)
-            vals2 = _solve(energy, c2, gauge, k, sigma, LH2)[0]
+            vals2 = _solve(energy, c2, gauge, k, sigma, LH2, J2, vectors=False)[0]
         drift, dist = _match_drift(vals, vals2, tol)
         keep = (drift <= drift_tol) | (dist <= tol2)
         spurious = vals[~keep]
@@ -667,7 +709,9 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         msg += f"; {spurious.size} rejected as spurious (N = {curve.N} vs {N2})"
     if notes:
         msg += "; " + "; ".join(notes)
-    return Spectrum(vals, vecs, n_unstable, n_kernel, float(tol), kr, spurious, drift, gauge,
+    n_small, gap = small_cluster(vals, n_kernel, 10 * _EPS * normJ, max(2, curve.N // 4))
+    return Spectrum(vals, vecs, n_unstable, n_kernel, float(tol), n_small, gap, kr, spurious,
+                    drift, gauge,
                     "dense" if k is None else "shift-invert", sigma, curve.N, N2,
                     float(max_imag), float(asym), LH.multipliers, LH.projection_residual,
                     LH.relative_residual, True, status, msg)
