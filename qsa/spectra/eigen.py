@@ -358,7 +358,7 @@ def _build_kernel_report(energy, curve, LH, J, normJ, eigenvalues, kernel_tol, b
     notes = []
     if inner_norm(curve, x) == 0:
         notes.append("nabla_s kappa = 0 (a circle): the kernel element (nabla_s kappa, 0) is void")
-    elif abs(LH.multipliers[2]) > 0:
+    elif pred > max(1e-10, 10 * lag):
         notes.append(
             f"Lambda_3 = {LH.multipliers[2]:.6g} != 0, so nabla^2 E (nabla_s kappa, 0) = "
             "(nabla_s d_kE, d_kE nabla_s kappa / g) is not 0: the kernel element belongs to "

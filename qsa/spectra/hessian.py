@@ -129,9 +129,10 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
         dense, O(N^2) memory). ``"curvature"``: only ``Lambda_3 nabla^2 C_3`` (sparse).
         ``"auto"`` (default): all three on Fourier grids and for ``N <=``
         :data:`DENSE_CONSTRAINT_LIMIT`; otherwise ``C_1, C_2`` are dropped when
-        ``|Lambda_{1,2}| |Psi_{1,2}| <= 1e-8 |nabla_I E|`` (for the local energies here
-        ``Lambda_{1,2} = 0`` at equilibria, MATH.md section 4), and a ``ValueError`` is
-        raised if they are not negligible.
+        ``|Lambda_j Psi_j| <= max(|nabla_I E - Lambda . Psi|, 1e-8 |nabla_I E|)`` (the
+        term is below the accuracy of the projection itself; for the local energies
+        here ``Lambda_{1,2} = 0`` at equilibria, MATH.md section 4), and a
+        ``ValueError`` is raised if they are not negligible.
 
     Returns
     -------
@@ -173,8 +174,8 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
         use12 = True
     else:
         use12 = False
-        gnorm = inner_norm(curve, grad)
-        big = [abs(Lam[j]) * inner_norm(curve, Psi[j]) > 1e-8 * gnorm for j in range(2)]
+        floor = max(res_abs, 1e-8 * inner_norm(curve, grad))
+        big = [abs(Lam[j]) * inner_norm(curve, Psi[j]) > floor for j in range(2)]
         if constraints == "auto" and any(big):
             raise ValueError(
                 f"curve: Lambda_1,2 = {Lam[:2]} are not negligible, so L_Lambda needs the dense "
