@@ -8,7 +8,7 @@
   ARPACK in shift-invert mode).
 
 The state is the 3-pulse equilibrium of ``Faceting(alpha=0.15, kstar=5) + Perimeter(5, L*)``
-(:func:`qsa.equilibria.npulse`), polished on the finite-difference grid. Targets
+(:func:`qsa.equilibria.npulse`) sampled on each grid (FD at N = 10^3, 10^4, 10^5). Targets
 (issue 4): <= 10 s each on 2 cores. Prints a table: case, N, eigenvalues, seconds
 (assembly + solve), n_unstable, n_kernel, largest eigenvalue, |lambda| of the kernel.
 
@@ -24,7 +24,6 @@ import numpy as np
 
 from qsa import FiniteDifference, Fourier
 from qsa.equilibria import npulse
-from qsa.equilibria.newton import polish
 from qsa.spectra import spectrum
 
 
@@ -40,13 +39,12 @@ def main(alpha=0.15):
     for reject in (False, True):
         s, dt = timed(lambda r=reject: spectrum(eq.energy, eq.curve, reject_spurious=r))
         rows.append((f"Fourier dense{' +check' if reject else ''}", 1023, s, dt))
-    fd = npulse(3, alpha, grid=FiniteDifference(100_000))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        p, dtp = timed(lambda: polish(fd.energy, fd.curve))
-    print(f"(FD N = 10^5 polish: {dtp:.1f} s, {p.message})")
-    s, dt = timed(lambda: spectrum(p.energy, p.curve, k=20, sigma=0.0))
-    rows.append(("FD shift-invert k=20", 100_000, s, dt))
+    for N in (1000, 10_000, 100_000):
+        fd = npulse(3, alpha, grid=FiniteDifference(N))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            s, dt = timed(lambda c=fd: spectrum(c.energy, c.curve, k=20, sigma=0.0))
+        rows.append(("FD shift-invert k=20", N, s, dt))
 
     print(f"{'case':<24}{'N':>8}{'#eig':>6}{'time [s]':>10}{'unstable':>10}{'kernel':>8}"
           f"{'max lambda':>14}{'kernel |lambda|':>17}{'spurious':>10}")
@@ -56,6 +54,12 @@ def main(alpha=0.15):
               f"{s.n_kernel:>8}{np.max(s.eigenvalues):>14.6g}"
               f"{(kern.max() if kern.size else np.nan):>17.2e}{s.spurious.size:>10}")
     print("target: <= 10 s per row (2 cores)")
+    ev = rows[1][2].eigenvalues
+    print("Fourier reference, 8 eigenvalues nearest 0:",
+          np.array2string(ev[np.argsort(np.abs(ev))[:8]], precision=6))
+    for name, N, s, _ in rows[2:]:
+        ev = s.eigenvalues
+        print(f"FD N={N}: ", np.array2string(ev[np.argsort(np.abs(ev))[:8]], precision=6))
 
 
 if __name__ == "__main__":

@@ -184,3 +184,22 @@ def test_energy_kernel_note_only_when_lambda3_matters():
     k = kernel_report(CanhamHelfrich(1.0) + Perimeter(1.0, 2 * np.pi - 0.5), c)
     assert any("circle" in n for n in k.notes)
     assert k.lagrange_kernel == 0.0 and k.energy_kernel == 0.0
+
+
+def test_round_off_limit_is_reported_at_large_N():
+    """J has order 6 (faceting): at FD N = 10^4 the eigenvalues near 0 are round-off."""
+    import warnings
+
+    from qsa.equilibria import npulse, polish
+
+    eq = npulse(3, 0.15, grid=FiniteDifference(1000))
+    good = polish(eq.energy, eq.curve)
+    bad = npulse(3, 0.15, grid=FiniteDifference(10_000))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s_good = spectrum(good.energy, good.curve, k=8)
+        s_bad = spectrum(bad.energy, bad.curve, k=8)
+    assert s_bad.roundoff > 1e5 * s_good.roundoff  # ~ N^6
+    assert s_good.n_kernel == 3 and s_good.status == 0
+    assert "round-off" in s_bad.message and s_bad.n_kernel > 3
+    assert "round-off" not in s_good.message
