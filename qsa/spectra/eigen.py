@@ -654,7 +654,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     normJ = operator_norm(curve, J)
     basis = _rigid_normal_basis(curve)
     tol, defect = _kernel_tolerance(curve, J, normJ, basis)
-    if gauge == "comoving" or gauge == "paper":
+    nonnormal = gauge in ("comoving", "paper")
+    if nonnormal and k is not None:
         # non-normal 2N x 2N: its kernel is (nearly) defective, round-off ~ sqrt(eps)
         tol = max(tol, 10 * np.sqrt(_EPS) * normJ)
     if kernel_tol is not None:
@@ -684,6 +685,12 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
                         LH.projection_residual,
                         LH.relative_residual, False, 2, f"eigen-solver failed: {exc}")
     vals, vecs = _sort(vals, vecs)
+    if nonnormal and k is None and kernel_tol is None:
+        # a (nearly) defective kernel perturbed by eps |calL| splits like sqrt(eps |calL| rho),
+        # rho = the smallest non-kernel |lambda| of J (the scale of the coupled modes)
+        lamJ = np.abs(sla.eigvalsh(to_dense(symmetric_form(curve, J))))
+        rho = np.min(lamJ[lamJ > tol], initial=np.max(lamJ, initial=1.0))
+        tol = max(tol, 10 * float(np.sqrt(_EPS * np.max(np.abs(vals)) * rho)))
 
     spurious = np.array([], dtype=vals.dtype)
     drift = np.full(vals.size, np.nan)
@@ -709,12 +716,17 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     n_kernel = int(np.sum(np.abs(vals) <= tol))
     kvals = vals if gauge == "normal" else None
     kr = _build_kernel_report(energy, curve, LH, J, normJ, kvals, tol, basis, defect)
-    expected = kr.expected_kernel_dimension + (curve.N if gauge in ("comoving", "paper") else 0)
+    expected = kr.expected_kernel_dimension + {"comoving": curve.N, "paper": curve.N,
+                                               "scaled": 1}.get(gauge, 0)
     if n_kernel != expected and (k is None or n_kernel > expected):
-        notes.append(f"{n_kernel} eigenvalues within kernel_tol = {tol:.2e}, {expected} expected "
-                     f"(round-off eps |J| = {_EPS * normJ:.2e}; J has order 6 for faceting, so "
-                     "small eigenvalues drown in round-off at large N: use the smallest N that "
-                     "resolves the fronts)")
+        why = ("the 2N x 2N operator has spurious eigenvalues from under-resolved "
+               "reparameterization modes (MATH.md section 4): prefer gauge='normal'"
+               if nonnormal else
+               f"round-off eps |J| = {_EPS * normJ:.2e}; J has order 6 for faceting, so small "
+               "eigenvalues drown in round-off at large N: use the smallest N that resolves "
+               "the fronts")
+        notes.append(f"{n_kernel} eigenvalues within kernel_tol = {tol:.2e}, {expected} "
+                     f"expected ({why})")
     msg = (f"{gauge} gauge, {'dense' if k is None else f'shift-invert (k={k}, sigma={sigma})'}"
            f": {vals.size} eigenvalues, {n_unstable} unstable, {n_kernel} in the kernel "
            f"(|lambda| <= {tol:.2e})")
