@@ -91,6 +91,13 @@ def test_large_fd_curve_refuses_to_drop_significant_constraint_terms():
         lagrange_hessian(E, c)
     LH = lagrange_hessian(E, c, constraints="curvature")
     assert LH.constraints_included == (False, False, True)
+    # on a dense grid the significant Lambda_1 term is included: L = 0 - 1 * H_C1
+    from qsa.geometry import constraint_hessians
+
+    cf = skew_curve(Fourier(31))
+    LH = lagrange_hessian(E, cf)
+    assert LH.constraints_included == (True, True, True)
+    assert np.allclose(LH.matrix, -constraint_hessians(cf)[0], atol=1e-10)
 
 
 def test_result_types_and_json_summary(eq):
