@@ -57,8 +57,9 @@ def npulse_study(n_pulses=3, alpha=0.1, kstar=5.0, beta=5.0, nu1=0.0, N=None, fd
     Returns
     -------
     dict
-        Scalars ``N, converged, residual, relative_residual, closure, L, L_star, nu2,
-        energy``; arrays ``kappa, g``.
+        Scalars ``n_nodes`` (grid size), ``converged`` (the construction met its
+        tolerance), ``residual``, ``relative_residual``, ``closure``, ``L``, ``L_star``,
+        ``nu2``, ``energy``; arrays ``kappa``, ``g``.
 
     Examples
     --------
@@ -68,7 +69,7 @@ def npulse_study(n_pulses=3, alpha=0.1, kstar=5.0, beta=5.0, nu1=0.0, N=None, fd
     """
     eq = _npulse(n_pulses, alpha, kstar, beta, nu1, N, fd)
     p = eq.params
-    return {"N": int(eq.curve.N), "converged": bool(eq.success),
+    return {"n_nodes": int(eq.curve.N), "converged": bool(eq.success),
             "residual": float(eq.residual), "relative_residual": float(eq.relative_residual),
             "closure": float(eq.closure), "L": float(p["L"]), "L_star": float(p["L_star"]),
             "nu2": float(p["nu2"]), "energy": float(eq.energy.energy(eq.curve)),
@@ -89,16 +90,18 @@ def spectrum_study(n_pulses=3, alpha=0.1, kstar=5.0, beta=5.0, nu1=0.0, N=None, 
     Returns
     -------
     dict
-        Scalars ``N, converged, residual, n_unstable, n_kernel, lambda_0..`` (largest
-        first) and the kernel-report residuals; array ``eigenvalues``.
+        Scalars ``n_nodes, converged, residual, relative_residual, n_unstable, n_kernel,
+        lambda_0..`` (largest first) and the kernel-report numbers ``kernel_*``; array
+        ``eigenvalues`` (all, largest first).
     """
     from qsa import spectra
 
     eq = _npulse(n_pulses, alpha, kstar, beta, nu1, N, fd)
     sp = spectra.spectrum(eq.energy, eq.curve)
     ev = np.sort(np.real(np.asarray(sp.eigenvalues)))[::-1]
-    out = {"N": int(eq.curve.N), "converged": bool(eq.success),
-           "residual": float(eq.residual), "n_unstable": int(sp.n_unstable),
+    out = {"n_nodes": int(eq.curve.N), "converged": bool(eq.success),
+           "residual": float(eq.residual), "relative_residual": float(eq.relative_residual),
+           "n_unstable": int(sp.n_unstable),
            "n_kernel": int(sp.n_kernel)}
     for i in range(int(n_leading)):
         out[f"lambda_{i}"] = float(ev[i]) if i < ev.size else float("nan")

@@ -48,6 +48,7 @@ import io
 import itertools
 import json
 import math
+import multiprocessing as mp
 import os
 import sys
 import tempfile
@@ -316,6 +317,10 @@ def _compute_point(study, params):
 
 def _store_point(points_dir: Path, key, study_name, params, outcome):
     scalars, arrays = _split_result(outcome["result"], study_name)
+    clash = sorted(set(params) & (set(scalars) | set(arrays)))
+    if clash:
+        raise ValueError(f"study {study_name} returns {clash}, which are also its "
+                         "parameters: rename the results")
     buf = io.BytesIO()
     np.savez(buf, **arrays)
     blob = buf.getvalue()
@@ -460,8 +465,39 @@ def _progress_bar(total, progress):
     return tqdm(total=total, desc="sweep", unit="pt")
 
 
+_BLAS_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+@contextlib.contextmanager
+def _environ(values):
+    old = {k: os.environ.get(k) for k in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def _default_executor(stack, workers, blas_threads):
+    """In-process for one worker, else a process pool of fresh (spawned) interpreters."""
+    n = int(workers) if workers is not None else (os.cpu_count() or 1)
+    if n == 1:
+        return SerialExecutor()
+    pool = cf.ProcessPoolExecutor(n, mp_context=mp.get_context("spawn"))
+    stack.callback(pool.shutdown, wait=True, cancel_futures=True)
+    if blas_threads is not None:
+        # workers start (lazily, at submission) with this environment: their BLAS uses
+        # blas_threads threads, as the pool already keeps every core busy
+        stack.enter_context(_environ({v: str(int(blas_threads)) for v in _BLAS_VARS}))
+    return pool
+
+
 def run_sweep(study, params, out, executor=None, workers=None, progress=None,
-              on_corrupt="recompute"):
+              on_corrupt="recompute", blas_threads=1):
     """Evaluate ``study`` on every point of ``params``, storing each point in ``out``.
 
     Parameters
@@ -478,6 +514,9 @@ def run_sweep(study, params, out, executor=None, workers=None, progress=None,
         ``workers`` processes (``workers=1``: in this process, :class:`SerialExecutor`).
     workers : int, optional
         Size of the default process pool (default ``os.cpu_count()``).
+    blas_threads : int or None
+        BLAS/OpenMP threads of each worker of the default pool (environment variables
+        set when the spawned workers start); ``None`` leaves the environment alone.
     progress : bool, optional
         tqdm progress bar; default: only when stderr is a terminal.
     on_corrupt : {"recompute", "raise"}
@@ -536,23 +575,18 @@ def run_sweep(study, params, out, executor=None, workers=None, progress=None,
         todo.append((key, p))
     n_reused = len(metas)
 
-    own = None
-    if executor is None and todo:
-        n = int(workers) if workers is not None else (os.cpu_count() or 1)
-        own = executor = SerialExecutor() if n == 1 else cf.ProcessPoolExecutor(n)
-    bar = _progress_bar(len(todo), progress)
-    try:
+    with contextlib.ExitStack() as stack:
+        if executor is None and todo:
+            executor = _default_executor(stack, workers, blas_threads)
+        bar = _progress_bar(len(todo), progress)
+        if bar is not None:
+            stack.callback(bar.close)
         futures = {executor.submit(_compute_point, study, p): (key, p) for key, p in todo}
         for fut in cf.as_completed(futures):
             key, p = futures[fut]
             metas[key] = _store_point(points_dir, key, name, p, fut.result())
             if bar is not None:
                 bar.update()
-    finally:
-        if bar is not None:
-            bar.close()
-        if own is not None:
-            own.shutdown(wait=True, cancel_futures=True)
 
     result_names = []
     for key in keys:
