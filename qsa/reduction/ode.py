@@ -158,7 +158,7 @@ class FrontODE:
     length: float
     well: object = None
     cutoff: tuple = None
-    points_per_width: float = 12.0
+    points_per_width: float = 4.0
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)
 
@@ -170,7 +170,7 @@ class FrontODE:
         well, kstar = resolve_well(self.well, self.kstar)
         front = heteroclinic(self.alpha, well, kstar)
         object.__setattr__(self, "front", front)
-        M = _odd(max(self.points_per_width * self.length / front.width, 1025))
+        M = _odd(max(self.points_per_width * self.length / front.width, 255))
         object.__setattr__(self, "grid", Fourier(M))
 
     # ------------------------------------------------------------ geometry
@@ -186,7 +186,7 @@ class FrontODE:
 
     def profile(self, p, cutoff=None):
         """The :class:`SpliceProfile` at positions ``p``."""
-        p = self._check(p)
+        p = np.asarray(p, dtype=float)
         cut = cutoff or self.cutoff or default_cutoff(p, self.length)
         return SpliceProfile(self.front, p, self.length, cut)
 
@@ -205,15 +205,15 @@ class FrontODE:
         prof = self.profile(p, cutoff)
         L, grid, s = self.length, self.grid, self.sigma
         y = prof.local(s)
-        up = prof.cut_front(y + prof.a)
-        dn = prof.cut_front(y - prof.a)
-        psi, d1, d2 = (np.sum(u - d, axis=-1) for u, d in zip(up, dn, strict=True))
-        dpsi = np.empty(y.shape[:-1] + (p.size,))
-        dpsi[:, 0::2] = -up[1]
-        dpsi[:, 1::2] = dn[1]
+        m = prof.a.size
+        v0, v1, v2 = prof.cut_front(np.concatenate([y + prof.a, y - prof.a], axis=1))
+        psi, d1, d2 = (np.sum(v[:, :m] - v[:, m:], axis=1) for v in (v0, v1, v2))
+        dpsi = np.empty((s.size, 2 * m))
+        dpsi[:, 0::2] = -v1[:, :m]
+        dpsi[:, 1::2] = v1[:, m:]
         w = L * grid.weights
-        theta = L * grid.cumulative(psi)
-        Theta = L * grid.cumulative(dpsi)
+        cum = L * grid.cumulative(np.column_stack([psi, dpsi]))  # one FFT pair
+        theta, Theta = cum[:, 0], cum[:, 1:]
         return {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "theta": theta,
                 "Theta": Theta, "n": np.size(p)}
 
@@ -270,7 +270,10 @@ class FrontODE:
 
     def velocity(self, p, cutoff=None, multipliers=False):
         """``F(p)``: the reduced velocity ``p'`` (shape (2N,)); with the multipliers if asked."""
-        p = self._check(p)
+        return self._velocity(self._check(p), cutoff, multipliers)
+
+    def _velocity(self, p, cutoff=None, multipliers=False):
+        """:meth:`velocity` without the ordering check (trial stages of the integrator)."""
         f = self._fields(p, cutoff)
         phi = self._normal(f)
         G = phi.T @ (f["w"][:, None] * phi)
@@ -279,7 +282,11 @@ class FrontODE:
         n = p.size
         A = np.vstack([J, np.ones((1, n)) / np.sqrt(n)])
         K = np.block([[G, A.T], [A, np.zeros((4, 4))]])
-        sol = np.linalg.solve(K, np.concatenate([-dE, np.zeros(4)]))
+        rhs = np.concatenate([-dE, np.zeros(4)])
+        try:
+            sol = np.linalg.solve(K, rhs)
+        except np.linalg.LinAlgError:  # degenerate constraints (e.g. a symmetric lens)
+            sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
         return (sol[:n], sol[n:]) if multipliers else sol[:n]
 
     # ------------------------------------------------------------ linearization
@@ -370,7 +377,7 @@ class FrontODE:
             L = self.length
 
             def rhs(t, q, cut=cut):
-                return self.velocity(q, cut)
+                return self._velocity(q, cut)
 
             def gap_event(t, q, L=L):
                 return np.min(np.diff(np.append(q, q[0] + L))) - dc
@@ -381,7 +388,8 @@ class FrontODE:
             sol = solve_ivp(rhs, (t0, t_final), p, method=method, t_eval=te, rtol=rtol,
                             atol=atol, events=gap_event)
             nfev += sol.nfev
-            segments.append(_Segment(sol.t, sol.y.T, ids.copy(), cut))
+            Y = np.asarray(sol.y, dtype=float).reshape(p.size, -1).T
+            segments.append(_Segment(np.asarray(sol.t, dtype=float), Y, ids.copy(), cut))
             if sol.status == -1:
                 status, message = -1, f"solve_ivp failed: {sol.message}"
                 break
