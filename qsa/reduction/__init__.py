@@ -14,6 +14,8 @@ from qsa.reduction.fronts import (
     track_flow,
     track_fronts,
 )
+from qsa.reduction.ode import FrontODE, FrontODEResult, collision_distance, collision_sensitivity
 
 __all__ = ["CoarseningEvent", "Fronts", "FrontTracks", "detect_fronts", "track_flow",
-           "track_fronts"]
+           "track_fronts", "FrontODE", "FrontODEResult", "collision_distance",
+           "collision_sensitivity"]

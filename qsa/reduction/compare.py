@@ -30,7 +30,8 @@ import numpy as np
 from qsa.reduction.fronts import detect_fronts, track_fronts
 from qsa.reduction.ode import FrontODE
 
-__all__ = ["SCENARIOS", "Scenario", "FrontComparison", "scenario_splice", "compare_fronts"]
+__all__ = ["SCENARIOS", "Scenario", "FrontComparison", "scenario_splice", "compare_fronts",
+           "compare_eigenvalues"]
 
 
 @dataclass(frozen=True)
@@ -211,3 +212,47 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
     p_ode = seg.p - seg.p.mean(axis=1, keepdims=True)
     return FrontComparison(t, dae, P, seg.t, p_ode, float(tc_dae), float(tc_ode), facet_min,
                            error, summary)
+
+
+def compare_eigenvalues(n_corners=3, facet=0.35, alpha=0.1, kstar=5.0, N=285,
+                        angles=None, facets=None):
+    """Slow eigenvalues of the reduced Jacobian against the full linearization.
+
+    The full linearization (``qsa.spectra.spectrum``, ``gauge="normal"``, the
+    operator ``J = -[M^dagger L_Lambda M(., 0)]_1``) is only a linearization at an
+    equilibrium, so the splice (by default a regular polygon with equal facets,
+    an equilibrium by symmetry up to exponentially small terms) is polished
+    first (:func:`qsa.equilibria.polish`); the reduced Jacobian
+    (:meth:`FrontODE.eigenvalues`) is taken at the splice positions. Of the full
+    spectrum the ``2N - 1`` eigenvalues nearest 0 are the three rigid motions
+    (discretely ``~ eps |J|``) and the ``2N - 4`` slow front modes.
+
+    Returns
+    -------
+    dict
+        ``reduced``, ``full`` (matched, sorted descending), ``rigid``,
+        ``max_rel_diff``, ``polish_residual``, ``N``.
+    """
+    import warnings
+
+    from qsa import Fourier
+    from qsa.equilibria import polish, splice_polygon
+    from qsa.spectra import spectrum
+
+    ang = np.full(n_corners, 2 * np.pi / n_corners) if angles is None else np.deg2rad(angles)
+    fac = np.full(n_corners, facet) if facets is None else np.asarray(facets, dtype=float)
+    eq = splice_polygon(ang, fac, alpha, kstar=kstar, grid=Fourier(N))
+    p = np.array(eq.params["positions"])
+    red = FrontODE(alpha, kstar, eq.params["L"]).eigenvalues(p)
+    pol = polish(eq.energy, eq.curve)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        spec = spectrum(pol.energy, pol.curve, gauge="normal")
+    ev = np.real(np.asarray(spec.eigenvalues))
+    near = ev[np.argsort(np.abs(ev))][: red.size + 3]  # sorted by |lambda|
+    rigid, slow = near[:3], np.sort(near[3:])[::-1]
+    red = np.sort(np.real(red))[::-1]
+    rel = np.abs(red - slow) / np.abs(slow)
+    return {"reduced": red.tolist(), "full": slow.tolist(), "rigid": rigid.tolist(),
+            "max_rel_diff": float(rel.max()), "polish_residual": float(pol.residual),
+            "polish_success": bool(pol.success), "N": int(N), "n_corners": int(n_corners)}
