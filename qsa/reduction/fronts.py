@@ -201,6 +201,75 @@ class FrontTracks:
         return np.nonzero(np.isfinite(self.positions[i]))[0]
 
 
+def _wrapdiff(a, b, L):
+    return (a - b + 0.5 * L) % L - 0.5 * L
+
+
+def _cyclic(cur, kinds, pos, nkinds, L):
+    """Best cyclic assignment of ``pos`` to ``cur`` (same count, kinds agree): (shift, cost)."""
+    n = len(cur)
+    best = (None, np.inf)
+    for k in range(n):
+        idx = (np.arange(n) + k) % n
+        if np.any(nkinds[idx] != kinds):
+            continue
+        cost = np.max(np.abs(_wrapdiff(pos[idx], cur, L)))
+        if cost < best[1]:
+            best = (k, cost)
+    return best
+
+
+def _match_in_order(cur, kinds, new, max_jump):
+    """Fronts keep their cyclic order: match all, or all but one adjacent annihilated pair.
+
+    Returns ``{a: (b, unwrapped position)}`` for the current fronts ``a`` that survive
+    (an annihilated pair is left out), or None when neither case fits.
+    """
+    n, L = len(cur), new.length
+    kinds = np.asarray(kinds)
+    cur = np.asarray(cur, dtype=float)
+    if n == 0 or new.n not in (n, n - 2):
+        return None
+    keeps = [np.arange(n)] if new.n == n else [
+        np.setdiff1d(np.arange(n), [a, (a + 1) % n]) for a in range(n)
+        if kinds[a] != kinds[(a + 1) % n]]
+    best = (None, None, np.inf)
+    for keep in keeps:
+        k, cost = _cyclic(cur[keep], kinds[keep], new.positions, new.kinds, L)
+        if k is not None and cost < best[2]:
+            best = (keep, k, cost)
+    keep, k, cost = best
+    if keep is None or (max_jump is not None and cost > max_jump):
+        return None
+    m = len(keep)
+    out = {}
+    for j, a in enumerate(keep):
+        b = (j + k) % m
+        out[int(a)] = (b, cur[a] + _wrapdiff(new.positions[b], cur[a], L))
+    return out
+
+
+def _match_nearest(cur, live, kinds, new, prev, max_jump, taken):
+    """Fallback: nearest unclaimed front of the same kind within a jump bound."""
+    L = new.length
+    jump = max_jump
+    if jump is None:
+        prev_gaps = prev.gaps()
+        jump = 0.25 * prev_gaps.min() if prev_gaps.size else np.inf
+        jump = max(jump, 4 * new.spacing)
+    matched = {}
+    for a, tr in enumerate(live):
+        if new.n == 0:
+            break
+        d = np.where((new.kinds == kinds[tr]) & ~taken,
+                     np.abs(_wrapdiff(new.positions, cur[a], L)), np.inf)
+        b = int(np.argmin(d))
+        if d[b] <= jump:
+            taken[b] = True
+            matched[tr] = cur[a] + _wrapdiff(new.positions[b], cur[a], L)
+    return matched
+
+
 def track_fronts(times, kappas, kstar, lengths=None, max_jump=None):
     """Follow the fronts of successive curvature profiles.
 
@@ -214,7 +283,10 @@ def track_fronts(times, kappas, kstar, lengths=None, max_jump=None):
         ``L`` at each snapshot (sample input; default 1).
     max_jump : float, optional
         Largest move of a front between snapshots that still counts as the same
-        front; default a quarter of the smallest gap of the previous snapshot.
+        front. Fronts keep their cyclic order, so by default an in-order match
+        of all fronts, or of all but one adjacent annihilated pair, is accepted
+        whatever the moves; other changes fall back to nearest-front matching
+        within a quarter of the smallest previous gap.
 
     Returns
     -------
@@ -240,25 +312,14 @@ def track_fronts(times, kappas, kstar, lengths=None, max_jump=None):
     events, unmatched = [], 0
     for i in range(1, t.size):
         new = snaps[i]
-        L = new.length
         row = [np.nan] * len(kinds)
         taken = np.zeros(new.n, dtype=bool)
-        jump = max_jump
-        if jump is None:
-            prev_gaps = snaps[i - 1].gaps()
-            jump = 0.25 * prev_gaps.min() if prev_gaps.size else np.inf
-            jump = max(jump, 4 * new.spacing)
-        matched = {}
-        for a, tr in enumerate(live):
-            if new.n == 0:
-                break
-            d = (new.positions - cur[a] + 0.5 * L) % L - 0.5 * L
-            d = np.where((new.kinds == kinds[tr]) & ~taken, np.abs(d), np.inf)
-            b = int(np.argmin(d))
-            if d[b] <= jump:
-                taken[b] = True
-                step = (new.positions[b] - cur[a] + 0.5 * L) % L - 0.5 * L
-                matched[tr] = cur[a] + step
+        matched = _match_in_order(cur, [kinds[tr] for tr in live], new, max_jump)
+        if matched is not None:
+            matched = {live[a]: pos for a, (b, pos) in matched.items()}
+            taken[:] = True
+        else:
+            matched = _match_nearest(cur, live, kinds, new, snaps[i - 1], max_jump, taken)
         lost = [tr for tr in live if tr not in matched]
         # annihilated pairs: lost fronts of opposite kinds that were neighbours
         order = sorted(lost, key=lambda tr: rows[-1][tr])

@@ -109,3 +109,12 @@ def test_tracking_bad_times():
     kap = moving_profiles([0.0, 0.1])
     with pytest.raises(ValueError, match="times"):
         track_fronts([0.1, 0.0], kap, 5.0)
+
+
+def test_tracking_coarse_snapshots_fast_pair():
+    # the closing pair moves by more than a quarter of the gap between snapshots
+    times = np.array([0.0, 0.6, 0.95, 1.3])
+    tr = track_fronts(times, moving_profiles(times), 5.0, [3.0] * times.size)
+    assert len(tr.events) == 1 and tr.unmatched == 0
+    assert tr.first_collision.bracket == (0.95, 1.3)
+    assert np.all(np.isfinite(tr.positions[2]))
