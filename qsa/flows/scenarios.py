@@ -32,22 +32,23 @@ _FINE = 8
 
 
 def perturbed_circle_radius(R, noise, modes, seed):
-    """``r(theta) = R (1 + sum_k noise (a_k cos k theta + b_k sin k theta))``.
+    """``r(theta) = R (1 + noise sum_k cos(k theta + phi_k))``, ``k = modes[0] .. modes[1]``.
 
-    ``a_k, b_k`` are standard normal draws of ``numpy.random.default_rng(seed)``
-    for ``k = modes[0] .. modes[1]`` (inclusive), drawn in that order.
+    Every mode has the same amplitude ``noise``; the phases ``phi_k`` are
+    uniform on ``[0, 2 pi)``, drawn in order of ``k`` from
+    ``numpy.random.default_rng(seed)``. Equal amplitudes leave the selection of
+    the spinodal wavenumber to the growth rates (MATH.md section 4: on the
+    circle ``lambda_k = -((k^2 - 1)^2 / R^4)(alpha^2 k^2 / R^2 + W''(1/R))``).
     """
     k0, k1 = int(modes[0]), int(modes[1])
     if not 1 <= k0 <= k1:
         raise ValueError(f"modes must be (k0, k1) with 1 <= k0 <= k1, got {modes!r}")
-    rng = np.random.default_rng(seed)
-    coef = rng.standard_normal((k1 - k0 + 1, 2))
+    phases = np.random.default_rng(seed).uniform(0.0, 2 * np.pi, k1 - k0 + 1)
     ks = np.arange(k0, k1 + 1)
 
     def r(theta):
         theta = np.asarray(theta, dtype=float)
-        pert = coef[:, :1] * np.cos(ks[:, None] * theta) + coef[:, 1:] * np.sin(ks[:, None] * theta)
-        return R * (1.0 + noise * pert.sum(axis=0))
+        return R * (1.0 + noise * np.cos(ks[:, None] * theta + phases[:, None]).sum(axis=0))
 
     return r
 
