@@ -182,6 +182,10 @@ def _facet_state_metrics(system, y, kstar, band):
     }
 
 
+def _index_of(times, t):
+    return int(np.argmin(np.abs(np.asarray(times) - t)))
+
+
 def _spread(values):
     v = np.asarray(values, dtype=float)
     return float(np.ptp(v) / np.mean(v)) if v.size else float("nan")
@@ -239,7 +243,8 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
 
     snaps = np.union1d(np.geomspace(min(spinodal_time or 1e-4, t_final) / 10, t_final,
                                     n_snapshots), [t for t in sc.figure_times if t <= t_final])
-    t1 = min(spinodal_time, t_final)
+    # the capped phase never takes the whole run (stage 2 needs a positive length)
+    t1 = spinodal_time if spinodal_time < t_final else 0.5 * t_final
     stage1 = None
     resuming = bool(resume and ck is not None and os.path.isfile(ck))
     stage1_path = None if out is None else os.path.join(out, "facet_stage1.npz")
@@ -319,6 +324,8 @@ def _facet_output(sc, out, series, stage1, res, t1, t_final, wall0, band, ck):
         "final_corner_spread": _spread(final["corner_turning"]),
         "final_facet_spread": _spread(final["facet_lengths"]),
         "final_R_kappa": final["R_kappa"],
+        "rotation_defect_at": {f"{t:g}": metrics[_index_of(t_snap, t)]["rotation_defect"]
+                               for t in sc.figure_times if t <= t_snap[-1] * (1 + 1e-9)},
         "final_energy": float(a["energy"][-1]) if a["energy"].size else float("nan"),
         "energy_max_increase": float(dE.max()) if dE.size else 0.0,
         "energy_n_increases": int(np.sum(dE > 0)),
@@ -447,6 +454,7 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
         "approach": a["approach"], "t_steps": res.t_steps, "energy_steps": res.energy_steps,
         "snap_t": res.t, "snap_x": res.states[:, :N], "snap_y": res.states[:, N : 2 * N],
         "snap_energy": res.energy,
+        "x0": system.positions(system.y0)[0], "y0": system.positions(system.y0)[1],
     }
     files = [] if out is None else write_output(out, name, arrays, summary)
     return RunOutput(name, summary, arrays, res, files)
@@ -462,19 +470,20 @@ def resolution_check(scenario=None, N=None, t_short=2e-3, *, progress=None):
     -------
     dict
         ``max_difference`` (max over nodes of the position difference),
-        its ratio to ``l*`` (CHA) and the wall times of both runs.
+        its ratio to ``l*`` (CHA), and per run (N, 2N) ``wall``, ``steps``,
+        ``success``.
     """
     sc = CHAScenario() if scenario is None else scenario
     N = sc.N if N is None else int(N)
-    out = {"N": N, "t_short": float(t_short)}
+    out = {"N": N, "t_short": float(t_short), "wall": [], "steps": [], "success": []}
     pos = {}
     for n in (N, 2 * N):
         w0 = time.perf_counter()
         res = solve_flow(sc.model(), sc.initial(n), t_short, N=n, tol=sc.tol,
                          progress=progress)
-        out[f"wall_{n}"] = time.perf_counter() - w0
-        out[f"success_{n}"] = bool(res.success)
-        out[f"steps_{n}"] = int(res.n_steps)
+        out["wall"].append(time.perf_counter() - w0)
+        out["steps"].append(int(res.n_steps))
+        out["success"].append(bool(res.success))
         pos[n] = (res.x, res.y)
     d = np.hypot(pos[N][0] - pos[2 * N][0][::2], pos[N][1] - pos[2 * N][1][::2])
     out["max_difference"] = float(d.max())
