@@ -4,6 +4,8 @@ Table T1 (l* = 0.01, a = 1, A0 = 40, beta = 60, eps = 0.08), rho = 1.3, to
 t = 2.5 at N = 2400 (override with --N). Prints the paired sheets and their
 separation against l* sqrt(a^2 + 1/2), the self-intersection report and the
 wall time; ``--check-resolution`` first compares N with 2N over a short time.
+The run is stored as ``cha_rho1.3`` (as in ``qsa reproduce folding``), so
+the two commands share it with the same ``--out`` and ``--resume``.
 """
 
 from __future__ import annotations
@@ -56,7 +58,7 @@ def run(args):
                      f"difference {rc['max_difference']:.3g} = "
                      f"{rc['max_difference_over_l_star']:.3g} l* "
                      f"(wall {rc['wall'][0]:.0f} s + {rc['wall'][1]:.0f} s)")
-    out = run_cha(sc, args.out, name="snowflake", t_final=args.t_final, N=args.N,
+    out = run_cha(sc, args.out, t_final=args.t_final, N=args.N,
                   resume=args.resume, progress=progress(args))
     s = {**out.summary, **summary}
     if not args.no_plots:
