@@ -21,6 +21,9 @@ def add_arguments(parser):
     parser.add_argument("--N", type=int, default=None, help="nodes (default 2400)")
     parser.add_argument("--rho", type=float, nargs="+", default=[1.2, 1.3, 1.4],
                         help="precompression factors (default 1.2 1.3 1.4)")
+    parser.add_argument("--noise", type=float, default=0.0,
+                        help="relative radial noise in modes 1-30 (default 0)")
+    parser.add_argument("--seed", type=int, default=1, help="noise seed (default 1)")
 
 
 def run(args):
@@ -32,7 +35,8 @@ def run(args):
 
     runs, lines = [], []
     for rho in sorted(args.rho):
-        out = run_cha(replace(CHAScenario(), rho=rho), args.out, t_final=args.t_final, N=args.N,
+        sc = replace(CHAScenario(), rho=rho, noise=args.noise, seed=args.seed)
+        out = run_cha(sc, args.out, t_final=args.t_final, N=args.N,
                       resume=args.resume, progress=progress(args))
         runs.append(out)
         lines += cha_lines(out.summary)

@@ -142,6 +142,10 @@ class CHAScenario:
     amp: float = 0.4
     steep: float = 3.0
     lobes: int = 13
+    #: optional symmetry-breaking perturbation r -> r (1 + noise sum_k cos(k theta + phi_k))
+    noise: float = 0.0
+    noise_modes: tuple = (1, 30)
+    seed: int = 1
     t_final: float = 2.5
     tol: float = 1e-4
     figure_times: tuple = (0.0, 1.5e-3, 0.1432, 0.16414, 0.2, 0.713, 2.5)
@@ -155,13 +159,18 @@ class CHAScenario:
         """Equal-chord nodes of the crenellated curve, each shape (N,)."""
         N = self.N if N is None else int(N)
         r = crenellated_radius(self.r0, self.amp, self.steep, self.lobes)
+        if self.noise:
+            bump = perturbed_circle_radius(1.0, self.noise, self.noise_modes, self.seed)
+            return _polar_nodes(lambda th: r(th) * bump(th), N, max(_FINE * N, 20000))
         return _polar_nodes(r, N, max(_FINE * N, 20000))
+
+    def params(self):
+        d = asdict(self)
+        d["figure_times"] = list(self.figure_times)
+        d["noise_modes"] = list(self.noise_modes)
+        return d
 
     def pair_separation(self):
         """The optimal near-contact separation ``l* sqrt(a^2 + 1/2)`` (MATH.md section 6)."""
         return self.l_star * math.sqrt(self.a**2 + 0.5)
 
-    def params(self):
-        d = asdict(self)
-        d["figure_times"] = list(self.figure_times)
-        return d
