@@ -16,12 +16,25 @@ from qsa.spectra.eigen import (
     kernel_report,
     operator_norm,
     second_resolution,
+    small_cluster,
     spectrum,
 )
-from qsa.spectra.hessian import LagrangeHessian, hessian, lagrange_hessian
-from qsa.spectra.linearization import GAUGES, linearization, normal_operator, scaled_operator
+from qsa.spectra.hessian import (
+    DENSE_CONSTRAINT_LIMIT,
+    LagrangeHessian,
+    hessian,
+    lagrange_hessian,
+)
+from qsa.spectra.linearization import (
+    GAUGES,
+    linearization,
+    normal_operator,
+    scaled_operator,
+    symmetric_form,
+)
 
 __all__ = [
+    "DENSE_CONSTRAINT_LIMIT",
     "GAUGES",
     "KernelReport",
     "LagrangeHessian",
@@ -35,5 +48,7 @@ __all__ = [
     "operator_norm",
     "scaled_operator",
     "second_resolution",
+    "small_cluster",
     "spectrum",
+    "symmetric_form",
 ]

@@ -17,13 +17,14 @@ shift-invert (the ``k`` eigenvalues nearest a shift ``sigma``):
 Kernel tolerance (documented, explicit): an eigenvalue counts as *kernel* when
 ``|lambda| <= kernel_tol``, with (unless given)
 
-    kernel_tol = 10 * max(max |rho_j|, eps * |J|),
+    kernel_tol = max(10 max |rho_j|, eps |J|),
 
 ``rho_j`` the Ritz values of ``J`` on the span of the normal components of the
 rigid motions (exactly 0 in the continuum, ``ker J``; their size is the
 discretization defect of the kernel, second order in the eigenvector error) and
-``eps |J|`` the round-off of a backward-stable eigen-solver (``|J|`` the operator
-norm in ``<.,.>``). For the non-normal 2N x 2N gauges (``"comoving"``,
+``eps |J|`` the round-off bound of a backward-stable eigen-solver (``|J|`` the
+operator norm in ``<.,.>``, estimated by power iteration; for the smooth low modes the
+observed error is 10-100 times below this bound). For the non-normal 2N x 2N gauges (``"comoving"``,
 ``"paper"``), whose kernel is (nearly) defective, the floor is raised to
 ``10 sqrt(eps) |J|``. ``n_unstable`` counts the accepted eigenvalues with
 ``Re lambda > kernel_tol``.
@@ -57,10 +58,11 @@ from qsa.spectra.linearization import (
     linearization,
     normal_operator,
     scaled_operator,
+    symmetric_form,
 )
 
 __all__ = ["Spectrum", "KernelReport", "spectrum", "kernel_report", "NotEquilibriumWarning",
-           "second_resolution", "operator_norm"]
+           "second_resolution", "operator_norm", "small_cluster"]
 
 _EPS = np.finfo(float).eps
 
@@ -163,6 +165,16 @@ class Spectrum:
         Number of eigenvalues with ``|lambda| <= kernel_tol``.
     kernel_tol : float
         See the module docstring.
+    n_small : int
+        Size of the cluster of small eigenvalues: the ``m >= max(n_kernel, 1)``
+        maximising ``gap_ratio = |lambda|_(m) / |lambda|_(m-1)`` over the ``|lambda|``
+        sorted increasingly (floored at the round-off level ``10 eps |J|``), among
+        the smallest ``N // 4``. For a splice of 2N fronts (N corners) well apart,
+        ``n_small = 2N - 1``: the 2N front positions less the total-turning
+        constraint, i.e. the 2N - 4 free splice parameters (MATH.md section 5) plus
+        the 3 rigid motions; they are small like the residuals, the rest O(1).
+    gap_ratio : float
+        The ratio at ``n_small`` (how well the cluster is separated).
     kernel : KernelReport
     spurious : ndarray
         Eigenvalues rejected by the two-resolution check (empty if it was not run).
@@ -174,6 +186,12 @@ class Spectrum:
     sigma : float or None
     N, N2 : int
         Resolution, and the second resolution (None if not used).
+    roundoff : float
+        ``eps |J|`` (``|J|`` the ``<.,.>`` operator norm): the absolute round-off
+        level of every computed eigenvalue. ``J`` is a differential operator of
+        order 6 for the faceting energy (4 for Canham-Helfrich), so this grows like
+        ``N^6``: eigenvalues below it are noise (the message says so). Use the
+        smallest N that resolves the fronts (MATH.md section 4).
     max_imag : float
         ``max |Im lambda| / max(|lambda|)`` before taking real parts (0 for ``"normal"``).
     asymmetry : float
@@ -192,6 +210,8 @@ class Spectrum:
     n_unstable: int
     n_kernel: int
     kernel_tol: float
+    n_small: int
+    gap_ratio: float
     kernel: KernelReport
     spurious: np.ndarray
     drift: np.ndarray
@@ -200,6 +220,7 @@ class Spectrum:
     sigma: float | None
     N: int
     N2: int | None
+    roundoff: float
     max_imag: float
     asymmetry: float
     multipliers: np.ndarray
@@ -227,8 +248,9 @@ class Spectrum:
             "gauge": self.gauge, "method": self.method, "N": self.N, "N2": self.N2,
             "sigma": self.sigma, "n_eigenvalues": int(self.eigenvalues.size),
             "eigenvalues": num(ev), "n_unstable": self.n_unstable, "n_kernel": self.n_kernel,
-            "kernel_tol": self.kernel_tol, "n_spurious": int(self.spurious.size),
-            "max_imag": self.max_imag, "asymmetry": self.asymmetry,
+            "kernel_tol": self.kernel_tol, "n_small": self.n_small,
+            "gap_ratio": self.gap_ratio, "n_spurious": int(self.spurious.size),
+            "roundoff": self.roundoff, "max_imag": self.max_imag, "asymmetry": self.asymmetry,
             "multipliers": [float(x) for x in self.multipliers],
             "projection_residual": self.projection_residual,
             "relative_residual": self.relative_residual,
@@ -299,7 +321,7 @@ def _smooth_random(curve: Curve, modes=8, seed=1):
 
 
 def _kernel_tolerance(curve, J, normJ, basis):
-    """``(kernel_tol, defect)``: ``10 max(max |Ritz values of J on the rigid span|, eps |J|)``.
+    """``(kernel_tol, defect)``: ``max(10 max |Ritz values of J on the rigid span|, eps |J|)``.
 
     ``defect[j] = |J phi_j|`` for the orthonormal rigid normal basis ``phi_j``.
     """
@@ -309,7 +331,7 @@ def _kernel_tolerance(curve, J, normJ, basis):
     if basis.shape[0]:
         B = (basis * curve.dsigma) @ JB.T
         ritz = np.linalg.eigvalsh(0.5 * (B + B.T))
-    return 10.0 * max(np.max(np.abs(ritz)), _EPS * normJ), defect
+    return max(10.0 * np.max(np.abs(ritz)), _EPS * normJ), defect
 
 
 def _build_kernel_report(energy, curve, LH, J, normJ, eigenvalues, kernel_tol, basis, defect):
@@ -344,7 +366,7 @@ def _build_kernel_report(energy, curve, LH, J, normJ, eigenvalues, kernel_tol, b
     notes = []
     if inner_norm(curve, x) == 0:
         notes.append("nabla_s kappa = 0 (a circle): the kernel element (nabla_s kappa, 0) is void")
-    elif abs(LH.multipliers[2]) > 0:
+    elif pred > max(1e-10, 10 * lag):
         notes.append(
             f"Lambda_3 = {LH.multipliers[2]:.6g} != 0, so nabla^2 E (nabla_s kappa, 0) = "
             "(nabla_s d_kE, d_kE nabla_s kappa / g) is not 0: the kernel element belongs to "
@@ -393,7 +415,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
     tol_auto, defect = _kernel_tolerance(curve, J, normJ, basis)
     tol = tol_auto if kernel_tol is None else _positive(kernel_tol, "kernel_tol")
     if eigenvalues is None:
-        S = normal_operator(energy, curve, symmetric=True, lagrange=LH)
+        S = symmetric_form(curve, J)
         if not curve.grid.sparse or curve.N <= 2000:
             eigenvalues = sla.eigvalsh(to_dense(S))
         else:
@@ -469,12 +491,15 @@ def second_resolution(grid, factor=1.5):
     return FiniteDifference(N2)
 
 
-def _solve(energy, curve, gauge, k, sigma, LH):
-    """Eigenvalues/vectors in the gauge; returns (vals, vecs, weights, max_imag, asym, normA)."""
+def _solve(energy, curve, gauge, k, sigma, LH, J=None, vectors=True):
+    """Eigenvalues/vectors in the gauge; returns (vals, vecs, weights, max_imag, asym)."""
     w = curve.dsigma
     if gauge == "normal":
-        S = normal_operator(energy, curve, symmetric=True, lagrange=LH)
-        asym = _asymmetry(energy, curve, LH)
+        J = normal_operator(energy, curve, lagrange=LH) if J is None else J
+        S = symmetric_form(curve, J)
+        asym = _asymmetry(curve, J)
+        if k is None and not vectors:
+            return sla.eigvalsh(to_dense(S)), None, w, 0.0, asym
         if k is None:
             vals, Y = sla.eigh(to_dense(S))
         else:
@@ -487,7 +512,9 @@ def _solve(energy, curve, gauge, k, sigma, LH):
     else:
         A = linearization(energy, curve, gauge=gauge, lagrange=LH)
         wts = np.concatenate([w, w])
-    if k is None:
+    if k is None and not vectors:
+        vals, vecs = sla.eigvals(to_dense(A)), None
+    elif k is None:
         vals, vecs = sla.eig(to_dense(A))
     else:
         vals, vecs = _shift_invert(A, k, sigma, symmetric=False)
@@ -495,15 +522,17 @@ def _solve(energy, curve, gauge, k, sigma, LH):
     max_imag = float(np.max(np.abs(vals.imag)) / scale) if scale > 0 else 0.0
     if gauge != "paper":
         vals = vals.real
-        vecs = vecs.real if np.isrealobj(vals) else vecs
+    if vecs is None:
+        return vals, None, wts, max_imag, np.nan
+    if gauge != "paper":
+        vecs = vecs.real
     norms = np.sqrt(np.sum(wts[:, None] * np.abs(vecs) ** 2, axis=0))
     vecs = vecs / np.where(norms > 0, norms, 1.0)
     return vals, vecs, wts, max_imag, np.nan
 
 
-def _asymmetry(energy, curve, LH, probes=3):
-    """``max |W J x - (W J)^T x| / (|W J| |x|)`` over random probes (Euclidean)."""
-    J = normal_operator(energy, curve, lagrange=LH)
+def _asymmetry(curve, J, probes=3):
+    """``max |W J x - (W J)^T x| / |W J x|`` over random probes (Euclidean)."""
     w = curve.dsigma
     rng = np.random.default_rng(2)
     worst = 0.0
@@ -529,6 +558,26 @@ def _match_drift(vals, vals2, tol):
     dist = np.array([np.min(np.abs(vals2 - lam)) for lam in vals])
     drift = dist / np.maximum(np.abs(vals), 1e-300)
     return drift, dist
+
+
+def small_cluster(eigenvalues, n_kernel=0, floor=0.0, max_size=None):
+    """``(m, ratio)``: size of the cluster of small eigenvalues and its separation.
+
+    ``|lambda|`` sorted increasingly and floored at ``floor``; ``m`` maximises
+    ``|lambda|_(m) / |lambda|_(m-1)`` over ``max(n_kernel, 1) <= m <= max_size``
+    (default: half the number of eigenvalues). See :class:`Spectrum` ``n_small``.
+    """
+    a = np.sort(np.abs(np.asarray(eigenvalues)))
+    if a.size < 2:
+        return int(a.size), np.nan
+    a = np.maximum(a, max(floor, 1e-300))
+    hi = min(a.size - 1, max_size if max_size is not None else a.size // 2)
+    lo = max(int(n_kernel), 1)
+    if lo > hi:
+        return int(min(lo, a.size)), np.nan
+    ratios = a[lo: hi + 1] / a[lo - 1: hi]
+    j = int(np.argmax(ratios))
+    return lo + j, float(ratios[j])
 
 
 def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel_tol=None,
@@ -605,7 +654,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     normJ = operator_norm(curve, J)
     basis = _rigid_normal_basis(curve)
     tol, defect = _kernel_tolerance(curve, J, normJ, basis)
-    if gauge == "comoving" or gauge == "paper":
+    nonnormal = gauge in ("comoving", "paper")
+    if nonnormal and k is not None:
         # non-normal 2N x 2N: its kernel is (nearly) defective, round-off ~ sqrt(eps)
         tol = max(tol, 10 * np.sqrt(_EPS) * normJ)
     if kernel_tol is not None:
@@ -623,16 +673,24 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         notes.append(text)
 
     try:
-        vals, vecs, _, max_imag, asym = _solve(energy, curve, gauge, k, sigma, LH)
+        vals, vecs, _, max_imag, asym = _solve(energy, curve, gauge, k, sigma, LH, J)
     except (np.linalg.LinAlgError, spla.ArpackError, spla.ArpackNoConvergence,
             RuntimeError) as exc:
         kr = _build_kernel_report(energy, curve, LH, J, normJ, None, tol, basis, defect)
         empty = np.array([])
-        return Spectrum(empty, np.zeros((curve.N, 0)), 0, 0, float(tol), kr, empty, empty,
+        return Spectrum(empty, np.zeros((curve.N, 0)), 0, 0, float(tol), 0, np.nan, kr, empty,
+                        empty,
                         gauge, "dense" if k is None else "shift-invert", sigma, curve.N, None,
-                        np.nan, np.nan, LH.multipliers, LH.projection_residual,
+                        float(_EPS * normJ), np.nan, np.nan, LH.multipliers,
+                        LH.projection_residual,
                         LH.relative_residual, False, 2, f"eigen-solver failed: {exc}")
     vals, vecs = _sort(vals, vecs)
+    if nonnormal and k is None and kernel_tol is None:
+        # a (nearly) defective kernel perturbed by eps |calL| splits like sqrt(eps |calL| rho),
+        # rho = the smallest non-kernel |lambda| of J (the scale of the coupled modes)
+        lamJ = np.abs(sla.eigvalsh(to_dense(symmetric_form(curve, J))))
+        rho = np.min(lamJ[lamJ > tol], initial=np.max(lamJ, initial=1.0))
+        tol = max(tol, 10 * float(np.sqrt(_EPS * np.max(np.abs(vals)) * rho)))
 
     spurious = np.array([], dtype=vals.dtype)
     drift = np.full(vals.size, np.nan)
@@ -647,7 +705,7 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
                    tol)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotEquilibriumWarning)
-            vals2 = _solve(energy, c2, gauge, k, sigma, LH2)[0]
+            vals2 = _solve(energy, c2, gauge, k, sigma, LH2, J2, vectors=False)[0]
         drift, dist = _match_drift(vals, vals2, tol)
         keep = (drift <= drift_tol) | (dist <= tol2)
         spurious = vals[~keep]
@@ -658,8 +716,17 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     n_kernel = int(np.sum(np.abs(vals) <= tol))
     kvals = vals if gauge == "normal" else None
     kr = _build_kernel_report(energy, curve, LH, J, normJ, kvals, tol, basis, defect)
-    if gauge == "normal" and k is None and kr.kernel_dimension != kr.expected_kernel_dimension:
-        notes.append(kr.notes[-1])
+    expected = kr.expected_kernel_dimension + {"comoving": curve.N, "paper": curve.N,
+                                               "scaled": 1}.get(gauge, 0)
+    if n_kernel != expected and (k is None or n_kernel > expected):
+        why = ("the 2N x 2N operator has spurious eigenvalues from under-resolved "
+               "reparameterization modes (MATH.md section 4): prefer gauge='normal'"
+               if nonnormal else
+               f"round-off eps |J| = {_EPS * normJ:.2e}; J has order 6 for faceting, so small "
+               "eigenvalues drown in round-off at large N: use the smallest N that resolves "
+               "the fronts")
+        notes.append(f"{n_kernel} eigenvalues within kernel_tol = {tol:.2e}, {expected} "
+                     f"expected ({why})")
     msg = (f"{gauge} gauge, {'dense' if k is None else f'shift-invert (k={k}, sigma={sigma})'}"
            f": {vals.size} eigenvalues, {n_unstable} unstable, {n_kernel} in the kernel "
            f"(|lambda| <= {tol:.2e})")
@@ -667,7 +734,10 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         msg += f"; {spurious.size} rejected as spurious (N = {curve.N} vs {N2})"
     if notes:
         msg += "; " + "; ".join(notes)
-    return Spectrum(vals, vecs, n_unstable, n_kernel, float(tol), kr, spurious, drift, gauge,
+    n_small, gap = small_cluster(vals, n_kernel, 10 * _EPS * normJ, max(2, curve.N // 4))
+    return Spectrum(vals, vecs, n_unstable, n_kernel, float(tol), n_small, gap, kr, spurious,
+                    drift, gauge,
                     "dense" if k is None else "shift-invert", sigma, curve.N, N2,
-                    float(max_imag), float(asym), LH.multipliers, LH.projection_residual,
+                    float(_EPS * normJ), float(max_imag), float(asym), LH.multipliers,
+                    LH.projection_residual,
                     LH.relative_residual, True, status, msg)

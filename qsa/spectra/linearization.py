@@ -39,7 +39,7 @@ from qsa.curve import Curve
 from qsa.linalg import SparsePlusLowRank
 from qsa.spectra.hessian import LagrangeHessian, check_input, lagrange_hessian
 
-__all__ = ["linearization", "normal_operator", "scaled_operator", "GAUGES"]
+__all__ = ["linearization", "normal_operator", "scaled_operator", "symmetric_form", "GAUGES"]
 
 #: The gauges accepted by :func:`linearization` and :func:`qsa.spectra.spectrum`.
 GAUGES = ("comoving", "paper", "normal", "scaled")
@@ -94,19 +94,25 @@ def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None):
     """
     check_input(energy, curve)
     LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
+    J = _normal_core(curve, LH.matrix)
+    return symmetric_form(curve, J) if symmetric else J
+
+
+def _normal_core(curve, L):
     N = curve.N
     w = curve.dsigma
     w2 = np.concatenate([w, w])
     M1 = geometry.M(curve)[:, :N]
     # W2 L is symmetric (L is dsigma-self-adjoint); J = -W^{-1} M1^T (W2 L) M1
-    WL = _scale_rows_cols(LH.matrix, w2, np.ones(2 * N))
-    core = M1.T @ (WL @ M1)
-    if isinstance(core, np.matrix):  # pragma: no cover - defensive (sparse @ dense)
-        core = np.asarray(core)
-    if symmetric:
-        rs = 1.0 / np.sqrt(w)
-        return _symmetrize(_scale_rows_cols(core, -rs, rs))
+    WL = _scale_rows_cols(L, w2, np.ones(2 * N))
+    core = np.asarray(M1.T @ (WL @ M1)) if not curve.grid.sparse else M1.T @ (WL @ M1)
     return _scale_rows_cols(core, -1.0 / w, np.ones(N))
+
+
+def symmetric_form(curve: Curve, J):
+    """``(S + S^T) / 2`` with ``S = W^{1/2} J W^{-1/2}``, ``W = diag(dsigma)``, shape (N, N)."""
+    rw = np.sqrt(curve.dsigma)
+    return _symmetrize(_scale_rows_cols(J, rw, 1.0 / rw))
 
 
 def scaled_operator(energy, curve: Curve, lagrange=None) -> np.ndarray:
