@@ -258,14 +258,19 @@ def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", ks
 
 
 def mode_amplitude(x, y, k):
-    """``|c_k|`` of the radius ``r(phi)`` about the centroid: ``(1/pi) int r e^{-ik phi} dphi``.
+    """``|c_k| = |(1/pi) int r e^{-ik phi} dphi|``, ``r(phi)`` the radius about the area centroid.
 
     For a star-shaped closed curve sampled counter-clockwise at nodes ``(x, y)``
     (trapezoid rule in the polar angle ``phi``).
     """
     x, y = np.asarray(x, float), np.asarray(y, float)
-    phi = np.unwrap(np.arctan2(y - y.mean(), x - x.mean()))
-    r = np.hypot(x - x.mean(), y - y.mean())
+    # about the area centroid of the polygon (independent of how the nodes are spaced)
+    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+    area = 0.5 * cross.sum()
+    xc = np.sum((x + np.roll(x, -1)) * cross) / (6 * area)
+    yc = np.sum((y + np.roll(y, -1)) * cross) / (6 * area)
+    phi = np.unwrap(np.arctan2(y - yc, x - xc))
+    r = np.hypot(x - xc, y - yc)
     phi = np.append(phi, phi[0] + 2 * np.pi)
     f = np.append(r, r[0]) * np.exp(-1j * k * phi)
     return float(abs(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(phi))) / np.pi)

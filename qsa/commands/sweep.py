@@ -15,6 +15,18 @@ from __future__ import annotations
 import contextlib
 import json
 
+#: Column plotted by ``--plot`` when ``--y`` is not given.
+DEFAULT_Y = {"npulse": "residual", "spectrum": "lambda_0", "circle-spectrum": "max_rel_error",
+             "splice-spectrum": "slow_0", "flow-rate": "rate"}
+
+
+def _first_numeric(res, params):
+    for c in res.columns:
+        if c not in params and c not in ("success", "message") and \
+                any(isinstance(r.get(c), float) for r in res.rows):
+            return c
+    raise ValueError("--plot: the table has no numeric result column; pass --y")
+
 
 def add_parser(sub):
     from qsa.studies import STUDIES
@@ -38,7 +50,7 @@ def add_parser(sub):
     p.add_argument("--plot", metavar="FILE", help="plot --y against --x to FILE")
     p.add_argument("--x", default=None, help="x column of --plot (default: the first param)")
     p.add_argument("--y", default=None,
-                   help="y column of --plot (default: residual / lambda_0 by study)")
+                   help="y column of --plot (default by study: residual, lambda_0, ...)")
     p.add_argument("--progress", action=argparse_bool(), default=None,
                    help="progress bar (default: on a terminal)")
     p.set_defaults(func=run)
@@ -73,7 +85,7 @@ def run(args):
         from qsa import plotting
 
         x = args.x or grid.names[0]
-        y = args.y or {"npulse": "residual", "spectrum": "lambda_0"}[args.study]
+        y = args.y or DEFAULT_Y.get(args.study) or _first_numeric(res, grid.names)
         plotting.save(plotting.plot_sweep(res, x, y, title=f"qsa sweep {args.study}"),
                       args.plot)
         summary["plot"] = args.plot
