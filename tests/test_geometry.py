@@ -26,11 +26,15 @@ def test_kernels_fourier(N, amp):
         assert np.abs(Md @ p).max() < 1e-8
 
 
-def test_kernels_fd_order_two():
+@pytest.mark.parametrize("shape", ["trillium", "skew"])
+def test_kernels_fd_order_two(shape):
+    """Second order also without symmetry: the positions' closure gap must not sit at the
+    seam (an O(1) defect at the last node, see ``geometry.periodic_positions``)."""
     Ns = [256, 512, 1024]
     eM, eP = [], []
     for N in Ns:
-        c = trillium(N, kind=FiniteDifference)
+        c = (trillium(N, kind=FiniteDifference) if shape == "trillium"
+             else skew_curve(FiniteDifference(N)))
         M, Md = geometry.M(c), geometry.M_adjoint(c)
         eM.append(max(np.abs(M @ r).max() for r in geometry.rigid_motions(c)))
         eP.append(max(np.abs(Md @ p).max() for p in geometry.constraint_gradients(c)))
@@ -57,6 +61,15 @@ def test_adjoint_and_formula(grid):
     W = np.concatenate([c.dsigma, c.dsigma])
     assert np.abs(W[:, None] * MM - (W[:, None] * MM).T).max() < 1e-10 * np.abs(MM).max()
     assert N == grid.N
+
+
+def test_periodic_positions_spread_the_closure_gap():
+    c = skew_curve(FiniteDifference(64))
+    gap = c.closure()[:2]
+    assert np.abs(gap).max() > 1e-6  # FD positions do not close exactly
+    P = geometry.periodic_positions(c)
+    np.testing.assert_allclose(P, c.positions() - np.outer(gap, c.grid.s), atol=1e-15)
+    np.testing.assert_array_equal(P[:, 0], c.origin)
 
 
 def test_range_of_M_orthogonal_to_Psi():
