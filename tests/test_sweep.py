@@ -109,15 +109,24 @@ def test_bad_arguments(tmp_path):
 
 
 # ------------------------------------------------------------- executors
-def test_dask_local_cluster_equals_process_pool(tmp_path):
+def test_dask_local_cluster_equals_process_pool(tmp_path, capsys):
     """The 16-point headline sweep: LocalCluster(2 worker processes) == process pool."""
+    from distributed import LocalCluster
+
+    from qsa.cli import main
     from qsa.sweep import dask_executor
 
     study = headline_study()
     pool = run_sweep(study, GRID16, tmp_path / "pool", workers=2)
     assert pool.success and pool.n_computed == 16, pool.message
-    with dask_executor(n_workers=2) as ex:
-        dsk = run_sweep(study, GRID16, tmp_path / "dask", executor=ex)
+    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                      dashboard_address=None) as cluster:
+        with dask_executor(address=cluster.scheduler_address) as ex:
+            dsk = run_sweep(study, GRID16, tmp_path / "dask", executor=ex)
+        # the CLI on the same cluster: qsa sweep ... --dask ADDRESS
+        assert main(["sweep", "npulse", "--param", "alpha=0.1,0.2", "--out",
+                     str(tmp_path / "cli"), "--dask", cluster.scheduler_address, "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["n_computed"] == 2
     assert dsk.success and dsk.n_computed == 16
     assert_same_table(pool.table_path, dsk.table_path)
     # the arrays stored per point agree as well
