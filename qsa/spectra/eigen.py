@@ -402,7 +402,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
     Examples
     --------
     >>> from qsa.equilibria import npulse
-    >>> eq = npulse(3, 0.2, grid=61)
+    >>> eq = npulse(3, 0.3)
     >>> rep = kernel_report(eq.energy, eq.curve)
     >>> rep.kernel_dimension, rep.expected_kernel_dimension, rep.lagrange_kernel < 1e-6
     (3, 3, True)
