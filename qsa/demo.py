@@ -238,7 +238,7 @@ def run_demo(outdir="qsa-demo", plots=True, verbose=True) -> dict:
             "npulse3.png": plotting.plot_curve_and_curvature(
                 objects["_equilibrium"].curve, title="3-pulse faceted equilibrium, α = 0.1"),
             "spectrum_npulse3.png": plotting.plot_spectrum(
-                objects["_spectrum"], title="spectrum of J at the 3-pulse"),
+                objects["_spectrum"], title="spectrum of J at the 3-pulse").figure,
             "splice.png": plotting.plot_curve_and_curvature(
                 objects["_splice"].curve, title="heteroclinic splice, facets 0.9, 1.0, 1.1"),
             "flow_decay.png": _decay_figure(plotting, summary["flow"], *objects["_flow"]),
