@@ -160,7 +160,8 @@ class Spectrum:
         ``"comoving"``/``"paper"``: stacked ``(kappa1, g1)``; ``"scaled"``:
         ``(kappa1, g1)`` with weights ``(dsigma, L)``).
     n_unstable : int
-        Number of eigenvalues with ``Re lambda > kernel_tol``.
+        Number of eigenvalues with ``Re lambda > kernel_tol`` (with ``k``: among the k
+        computed ones).
     n_kernel : int
         Number of eigenvalues with ``|lambda| <= kernel_tol``.
     kernel_tol : float
@@ -623,9 +624,10 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     --------
     >>> from qsa import Fourier
     >>> from qsa.equilibria import circle
-    >>> sp_ = spectrum(*(lambda e: (e.energy, e.curve))(circle(1.0, 0.1, grid=Fourier(33))))
-    >>> sp_.n_unstable, sp_.n_kernel
-    (0, 2)
+    >>> eq = circle(1.0, 0.1, grid=Fourier(33))
+    >>> s = spectrum(eq.energy, eq.curve)
+    >>> s.n_unstable, s.n_kernel, round(float(s.eigenvalues[2]), 6)  # lambda_2 = -9 * 0.54
+    (0, 2, -4.86)
     """
     check_input(energy, curve)
     _check_gauge(gauge)
