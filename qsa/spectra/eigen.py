@@ -351,7 +351,7 @@ def _build_kernel_report(energy, curve, LH, J, normJ, eigenvalues, kernel_tol, b
     en = _rel(curve, H, x, normH)
     pred = 0.0
     if inner_norm(curve, x) > 0 and normH > 0:
-        pred = (abs(LH.multipliers[2]) * inner_norm(curve, np.concatenate([np.zeros(N),
+        pred = float(abs(LH.multipliers[2]) * inner_norm(curve, np.concatenate([np.zeros(N),
                                                                              ks / curve.g]))
                 / (normH * inner_norm(curve, x)))
     rig = geometry.rigid_motions(curve)
