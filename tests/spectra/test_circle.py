@@ -103,11 +103,16 @@ def test_paper_gauge_has_spurious_positive_eigenvalues_on_a_stable_circle():
     assert paper.n_unstable > 10
     top = np.max(paper.eigenvalues.real)
     assert 2.0e3 < top < 5.0e3
-    # with Lambda = 0 (a pure Perimeter + Helfrich circle at L = L*: lambda_3 = eps k0^2/2
-    # is not 0 either), the difference is exactly the multiplier term
+    # the difference is exactly the multiplier term: -M M-dagger nabla^2 E + M M-dagger L_Lambda
+    # = -Lambda_3 M M-dagger nabla^2 C_3 (Lambda_3 = W'(1/R) = 6 here)
+    from qsa.geometry import MMdagger, constraint_hessians
+
     Lp = linearization(eq.energy, eq.curve, "paper")
     Lc = linearization(eq.energy, eq.curve, "comoving")
-    assert np.linalg.norm(Lp - Lc) > 1e-3 * np.linalg.norm(Lc)
+    lam3 = eq.multipliers[2]
+    assert lam3 == pytest.approx(6.0)
+    expected = -lam3 * MMdagger(eq.curve) @ constraint_hessians(eq.curve)[2]
+    assert np.allclose(Lp - Lc, expected, atol=1e-9 * np.abs(expected).max())
 
 
 def test_helfrich_circle_comoving_fourier():
