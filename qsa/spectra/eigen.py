@@ -232,6 +232,12 @@ class Spectrum:
     message: str = ""
     extra: dict = field(default_factory=dict, repr=False)
 
+    def __repr__(self):
+        return (f"Spectrum(gauge={self.gauge!r}, method={self.method!r}, N={self.N}, "
+                f"n_eigenvalues={self.eigenvalues.size}, n_unstable={self.n_unstable}, "
+                f"n_kernel={self.n_kernel}, n_small={self.n_small}, "
+                f"n_spurious={self.spurious.size}, status={self.status})")
+
     @property
     def unstable(self) -> np.ndarray:
         """The eigenvalues counted by ``n_unstable``."""
