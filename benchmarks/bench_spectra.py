@@ -61,9 +61,9 @@ def main(alpha=0.15):
     ev = spectrum(ref.energy, ref.curve).eigenvalues
     print(f"Fourier reference (N = {ref.curve.N}), 8 eigenvalues nearest 0:",
           np.array2string(ev[np.argsort(np.abs(ev))[:8]], precision=6))
-    for _name, N, s, _ in rows:
+    for name, N, s, _ in rows:
         ev = s.eigenvalues
-        print(f"FD N={N}: ", np.array2string(ev[np.argsort(np.abs(ev))[:8]], precision=6))
+        print(f"{name}, N={N}: ", np.array2string(ev[np.argsort(np.abs(ev))[:8]], precision=6))
 
 
 if __name__ == "__main__":

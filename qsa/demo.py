@@ -118,16 +118,13 @@ def stage_splice() -> dict:
         warnings.simplefilter("ignore", spectra.NotEquilibriumWarning)
         sp = spectra.spectrum(eq.energy, eq.curve, reject_spurious=False)
     lam = sp.eigenvalues
-    # the cluster: eigenvalues within a factor 1e2 of the smallest gap
-    gaps = np.abs(lam[1:] / np.where(lam[:-1] == 0, 1e-300, lam[:-1]))
-    n_small = int(np.argmax(gaps > 1e2) + 1) if np.any(gaps > 1e2) else len(lam)
+    n_small = sp.n_small
     out = {"N": eq.curve.N, "alpha": ALPHA, "facets": [0.9, 1.0, 1.1],
            "closure": eq.closure, "residual": eq.residual, "d_min": eq.params["d_min"],
            "n_small": n_small, "n_small_expected": 2 * 3 - 1,
            "small_eigenvalues": lam[:n_small].tolist(),
            "first_fast_eigenvalue": float(lam[n_small]) if n_small < len(lam) else None,
-           "separation": (float(abs(lam[n_small]) / np.abs(lam[:n_small]).max())
-                          if n_small < len(lam) else None),
+           "separation": float(sp.gap_ratio),
            "message": sp.message}
     out["_splice"] = eq
     return out
@@ -238,7 +235,7 @@ def run_demo(outdir="qsa-demo", plots=True, verbose=True) -> dict:
             "npulse3.png": plotting.plot_curve_and_curvature(
                 objects["_equilibrium"].curve, title="3-pulse faceted equilibrium, α = 0.1"),
             "spectrum_npulse3.png": plotting.plot_spectrum(
-                objects["_spectrum"], title="spectrum of J at the 3-pulse"),
+                objects["_spectrum"], title="spectrum of J at the 3-pulse").figure,
             "splice.png": plotting.plot_curve_and_curvature(
                 objects["_splice"].curve, title="heteroclinic splice, facets 0.9, 1.0, 1.1"),
             "flow_decay.png": _decay_figure(plotting, summary["flow"], *objects["_flow"]),

@@ -160,7 +160,8 @@ class Spectrum:
         ``"comoving"``/``"paper"``: stacked ``(kappa1, g1)``; ``"scaled"``:
         ``(kappa1, g1)`` with weights ``(dsigma, L)``).
     n_unstable : int
-        Number of eigenvalues with ``Re lambda > kernel_tol``.
+        Number of eigenvalues with ``Re lambda > kernel_tol`` (with ``k``: among the k
+        computed ones).
     n_kernel : int
         Number of eigenvalues with ``|lambda| <= kernel_tol``.
     kernel_tol : float
@@ -230,6 +231,12 @@ class Spectrum:
     status: int = 0
     message: str = ""
     extra: dict = field(default_factory=dict, repr=False)
+
+    def __repr__(self):
+        return (f"Spectrum(gauge={self.gauge!r}, method={self.method!r}, N={self.N}, "
+                f"n_eigenvalues={self.eigenvalues.size}, n_unstable={self.n_unstable}, "
+                f"n_kernel={self.n_kernel}, n_small={self.n_small}, "
+                f"n_spurious={self.spurious.size}, status={self.status})")
 
     @property
     def unstable(self) -> np.ndarray:
@@ -350,7 +357,7 @@ def _build_kernel_report(energy, curve, LH, J, normJ, eigenvalues, kernel_tol, b
     en = _rel(curve, H, x, normH)
     pred = 0.0
     if inner_norm(curve, x) > 0 and normH > 0:
-        pred = (abs(LH.multipliers[2]) * inner_norm(curve, np.concatenate([np.zeros(N),
+        pred = float(abs(LH.multipliers[2]) * inner_norm(curve, np.concatenate([np.zeros(N),
                                                                              ks / curve.g]))
                 / (normH * inner_norm(curve, x)))
     rig = geometry.rigid_motions(curve)
@@ -402,7 +409,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
     Examples
     --------
     >>> from qsa.equilibria import npulse
-    >>> eq = npulse(3, 0.2, grid=61)
+    >>> eq = npulse(3, 0.3)
     >>> rep = kernel_report(eq.energy, eq.curve)
     >>> rep.kernel_dimension, rep.expected_kernel_dimension, rep.lagrange_kernel < 1e-6
     (3, 3, True)
@@ -623,9 +630,10 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     --------
     >>> from qsa import Fourier
     >>> from qsa.equilibria import circle
-    >>> sp_ = spectrum(*(lambda e: (e.energy, e.curve))(circle(1.0, 0.1, grid=Fourier(33))))
-    >>> sp_.n_unstable, sp_.n_kernel
-    (0, 2)
+    >>> eq = circle(1.0, 0.1, grid=Fourier(33))
+    >>> s = spectrum(eq.energy, eq.curve)
+    >>> s.n_unstable, s.n_kernel, round(float(s.eigenvalues[2]), 6)  # lambda_2 = -9 * 0.54
+    (0, 2, -4.86)
     """
     check_input(energy, curve)
     _check_gauge(gauge)

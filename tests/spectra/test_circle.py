@@ -92,22 +92,26 @@ def test_comoving_and_scaled_nonzero_eigenvalues_match_J(gauge, R, alpha, kstar,
 def test_paper_gauge_has_spurious_positive_eigenvalues_on_a_stable_circle():
     """e:FOE-Lin as printed (-M M-dagger nabla^2 E, no multiplier term) on a stable circle.
 
-    The true spectrum (J, or the comoving -M M-dagger L_Lambda) is <= 0 here; the
-    paper's operator has large positive eigenvalues (MATH.md section 4: about +3.4e3
-    in an earlier session; here about +2.9e3 for R = 1, alpha = 0.1, kstar = 5, beta = 5).
+    R = 1, alpha = 0.1, kstar = 5, beta = 5 (Fourier(65)): the true spectrum (J, or the
+    comoving -M M-dagger L_Lambda) is <= 0, while the paper's operator has 62 positive
+    eigenvalues, the largest +3427.6 (the value MATH.md section 4 quotes as ~3.4e3).
     """
-    eq = circle(1.0, 0.1, grid=Fourier(33), beta=5.0, kstar=5.0)
-    true = spectrum(eq.energy, eq.curve, gauge="comoving")
-    paper = spectrum(eq.energy, eq.curve, gauge="paper")
+    eq = circle(1.0, 0.1, grid=Fourier(65), beta=5.0, kstar=5.0)
+    true = spectrum(eq.energy, eq.curve, gauge="comoving", reject_spurious=False)
+    paper = spectrum(eq.energy, eq.curve, gauge="paper", reject_spurious=False)
     assert true.n_unstable == 0 and np.max(true.eigenvalues) <= true.kernel_tol
-    assert paper.n_unstable > 10
-    top = np.max(paper.eigenvalues.real)
-    assert 2.0e3 < top < 5.0e3
-    # with Lambda = 0 (a pure Perimeter + Helfrich circle at L = L*: lambda_3 = eps k0^2/2
-    # is not 0 either), the difference is exactly the multiplier term
+    assert paper.n_unstable == 62
+    assert np.max(paper.eigenvalues.real) == pytest.approx(3427.6133, rel=1e-6)
+    # the difference is exactly the multiplier term: -M M-dagger nabla^2 E + M M-dagger L_Lambda
+    # = -Lambda_3 M M-dagger nabla^2 C_3 (Lambda_3 = W'(1/R) = 6 here)
+    from qsa.geometry import MMdagger, constraint_hessians
+
     Lp = linearization(eq.energy, eq.curve, "paper")
     Lc = linearization(eq.energy, eq.curve, "comoving")
-    assert np.linalg.norm(Lp - Lc) > 1e-3 * np.linalg.norm(Lc)
+    lam3 = eq.multipliers[2]
+    assert lam3 == pytest.approx(6.0)
+    expected = -lam3 * MMdagger(eq.curve) @ constraint_hessians(eq.curve)[2]
+    assert np.allclose(Lp - Lc, expected, atol=1e-9 * np.abs(expected).max())
 
 
 def test_helfrich_circle_comoving_fourier():

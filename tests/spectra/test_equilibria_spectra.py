@@ -211,6 +211,9 @@ def test_polished_splice_kernel(splices):
     assert k.lagrange_kernel <= 1e-6
     assert k.kernel_dimension == k.expected_kernel_dimension == 3
     assert s.asymmetry < 1e-8
+    J = normal_operator(p.energy, p.curve)
+    ev = np.linalg.eigvals(J)
+    assert np.max(np.abs(ev.imag)) <= 1e-8 * np.max(np.abs(ev))
     # the cluster persists at the exact equilibrium: 3 kernel + 2 slow front modes
     assert s.n_small == 5 and s.gap_ratio > 20
 

@@ -210,3 +210,14 @@ def test_round_off_limit_is_reported_at_large_N():
     assert s_good.n_kernel == 3 and s_good.status == 0
     assert "round-off" in s_bad.message and s_bad.n_kernel > 3
     assert "round-off" not in s_good.message
+
+
+def test_operator_norm_and_second_resolution(eq):
+    from qsa.spectra import normal_operator, operator_norm, second_resolution
+
+    J = normal_operator(eq.energy, eq.curve)
+    lam = np.linalg.eigvals(J).real
+    # J is dsigma-self-adjoint: its <.,.>-norm is its spectral radius
+    assert operator_norm(eq.curve, J, iters=200) == pytest.approx(np.max(np.abs(lam)), rel=1e-6)
+    assert second_resolution(Fourier(81)) == Fourier(123)
+    assert second_resolution(FiniteDifference(100)) == FiniteDifference(150)
