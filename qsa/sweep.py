@@ -28,7 +28,8 @@ A study that raises on a point is a *failed point* (``success=False`` and the
 exception text in ``message``); it is stored like any other and not retried.
 
 Workers never touch the output directory (the results travel back through the
-executor), so a cluster needs no shared file system.
+executor), so a cluster needs no shared file system. One sweep writes to a directory
+at a time: a new run removes the temporary files a killed one left behind.
 
 Examples
 --------
@@ -558,6 +559,9 @@ def run_sweep(study, params, out, executor=None, workers=None, progress=None,
     _atomic_write(manifest, json.dumps({"study": name, "params": params.to_json(),
                                         "qsa_version": __version__}, indent=1).encode())
 
+    for stale in points_dir.glob(".*.tmp"):  # half-written files of a killed run
+        with contextlib.suppress(OSError):
+            stale.unlink()
     points = params.points()
     keys = [point_key(name, p) for p in points]
     metas, todo, n_corrupt, seen = {}, [], 0, set()

@@ -184,8 +184,10 @@ def test_sigkill_then_resume_computes_only_missing_points(tmp_path):
     assert 3 <= len(done) < 9, "killed too late to test resumption"
     assert not (out / "results.csv").exists()
 
+    (out / "points" / ".deadbeef.json.abc.tmp").write_bytes(b"half")  # as a kill can leave
     res = run_sweep(slow_study, specs, out, workers=2)
     assert res.success and res.n_points == 9
+    assert not list((out / "points").glob(".*.tmp"))
     assert res.n_reused == len(done) and res.n_computed == 9 - len(done)
     # the finished points were not touched, the missing ones came from this run's workers
     for key, mtime in done.items():
