@@ -17,8 +17,7 @@ from qsa import Curve, FiniteDifference, Fourier, geometry
 from qsa.energies import CanhamHelfrich, DoubleWell, Faceting, Perimeter
 
 __all__ = ["run_demo", "stage_curves", "stage_npulse", "stage_spectrum", "stage_splice",
-           "stage_flow",
-           "mode_decay"]
+           "stage_flow"]
 
 ALPHA, KSTAR, BETA = 0.1, 5.0, 5.0
 
@@ -130,62 +129,10 @@ def stage_splice() -> dict:
     return out
 
 
-def mode_decay(eq, N=192, mode=None, amplitude=2e-3, efolds=3.0, tol=1e-7, snapshots=16):
-    """Perturb a faceting equilibrium along an eigenmode of J; measure the DAE decay rate.
-
-    The equilibrium is polished on a ``FiniteDifference(N)`` grid (the flow's
-    discretization); the eigenvector phi of J (normal gauge, ``<f, h> = int f h dsigma``)
-    displaces the nodes normally by ``amplitude`` (max norm); the DAE faceting flow
-    (BDF2) runs for ``efolds`` e-folding times; the rate is the slope of
-    ``log RMS V^n`` over the later snapshots (the first three are skipped: faster modes
-    excited by the perturbation's mismatch with the DAE discretization decay there).
-
-    Parameters
-    ----------
-    eq : Equilibrium
-        A faceting equilibrium (``eq.params`` has alpha, kstar, beta, L_star).
-    N : int
-        Nodes of the flow (and of the spectrum).
-    mode : int, optional
-        Index into the eigenvalues sorted descending; default: the first one below -1
-        (the slowest O(1) decaying mode).
-
-    Returns
-    -------
-    dict
-        ``eigenvalue``, ``measured_rate``, ``relative_error``, flow counters, and under
-        ``"_flow"`` the pair (FlowResult, RMS V^n at its snapshots).
-    """
-    from qsa import FiniteDifference, equilibria, spectra
-    from qsa.flows import FacetingFlow, solve_flow
-
-    c = equilibria.polish(eq.energy, eq.curve.on_grid(FiniteDifference(N))).curve
-    sp = spectra.spectrum(eq.energy, c)
-    lam = sp.eigenvalues
-    i = int(np.argmax(lam < -1.0)) if mode is None else int(mode)
-    lam1, phi = float(lam[i]), sp.eigenvectors[:, i]
-    if not lam1 < 0:
-        raise ValueError(f"mode {i} has eigenvalue {lam1:.3g} >= 0: it does not decay")
-    x, y = c.positions()
-    nx, ny = c.normal()
-    eps = amplitude / np.abs(phi).max()
-    p = eq.params
-    model = FacetingFlow(alpha=p["alpha"], kstar=p["kstar"], beta=p["beta"], L_star=p["L_star"])
-    T = efolds / abs(lam1)
-    res = solve_flow(model, (x + eps * phi * nx, y + eps * phi * ny), T, N=N, tol=tol,
-                     method="bdf2", t_eval=np.linspace(0, T, snapshots), progress=False)
-    V = np.array([np.sqrt(np.mean(res.system.normal_velocity(s) ** 2)) for s in res.states])
-    fit = slice(3, None)
-    rate = float(np.polyfit(res.t[fit], np.log(V[fit]), 1)[0])
-    return {"N": N, "mode": i, "eigenvalue": lam1, "measured_rate": rate,
-            "relative_error": abs(rate - lam1) / abs(lam1), "t_final": T,
-            "success": bool(res.success), "n_steps": int(res.n_steps),
-            "max_energy_increase": float(np.max(np.diff(res.energy_steps))),
-            "_flow": (res, V)}
-
-
 def stage_flow(eq) -> dict:
     """A short DAE flow from the perturbed 3-pulse: decay rate against J's eigenvalue."""
+    from qsa.studies import mode_decay
+
     return mode_decay(eq)
 
 
