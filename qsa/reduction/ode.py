@@ -158,7 +158,7 @@ class FrontODE:
     length: float
     well: object = None
     cutoff: tuple = None
-    points_per_width: float = 4.0
+    points_per_width: float = 3.0
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)
 
@@ -377,7 +377,13 @@ class FrontODE:
             L = self.length
 
             def rhs(t, q, cut=cut):
-                return self._velocity(q, cut)
+                try:
+                    v = self._velocity(q, cut)
+                except np.linalg.LinAlgError:
+                    v = None
+                # a wild trial stage (fronts overrun near a collision): NaN makes the
+                # Runge-Kutta error estimate reject the step and shrink it
+                return v if v is not None and np.all(np.isfinite(v)) else np.full(q.size, np.nan)
 
             def gap_event(t, q, L=L):
                 return np.min(np.diff(np.append(q, q[0] + L))) - dc

@@ -13,8 +13,15 @@ ALPHA, KSTAR = 0.1, 5.0
 def triangle():
     eq = splice_polygon(np.deg2rad([130, 120, 110]), [0.3, 0.4, 0.5], ALPHA, kstar=KSTAR)
     p = np.array(eq.params["positions"])
-    ode = FrontODE(ALPHA, KSTAR, eq.params["L"])
+    ode = FrontODE(ALPHA, KSTAR, eq.params["L"], points_per_width=8)
     return ode, p, tuple(eq.params["cutoff"])
+
+
+def test_default_resolution_is_converged(triangle):
+    ode, p, cut = triangle
+    fine = FrontODE(ALPHA, KSTAR, ode.length, points_per_width=24).velocity(p, cut)
+    coarse = FrontODE(ALPHA, KSTAR, ode.length).velocity(p, cut)
+    assert np.max(np.abs(coarse - fine)) < 1e-5 * np.max(np.abs(fine))
 
 
 def test_gradient_matches_energy_differences(triangle):
