@@ -52,6 +52,8 @@ def _report(s):
     ]
     for f, e in s["error_at"].items():
         lines.append(f"  up to {float(f):.2f} t_c: {100 * e:.2f}%")
+    lines.append(f"  while all gaps >= 2 d_c (d_c = {s['collision_distance']:.4g}; until "
+                 f"{s['separated_until']:.4f} t_c): {100 * s['max_error_separated']:.2f}%")
     lines.append(f"  up to the first collision: {100 * s['max_error']:.1f}% "
                  "(diverges like eps/(1 - t/t_c) for a rate error eps)")
     lines.append(f"  with the ODE time rescaled by t_c(ODE)/t_c(DAE): "
