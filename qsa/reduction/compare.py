@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from qsa.reduction.fronts import detect_fronts, track_fronts
+from qsa.reduction.fronts import detect_fronts, track_flow
 from qsa.reduction.ode import FrontODE
 
 __all__ = ["SCENARIOS", "Scenario", "FrontComparison", "scenario_splice", "compare_fronts",
@@ -161,10 +161,7 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
     res = solve_flow(FacetingFlow(alpha, kstar, beta, L), (x, y), t_final, N=N, tol=tol,
                      method=method, callback=stop, progress=False)
     time_dae = time.process_time() - start
-    S = res.system
-    kap = [S.curvature(s) for s in res.states]
-    lengths = [S.length(s) for s in res.states]
-    tracks = track_fronts(res.t, kap, kstar, lengths)
+    tracks = track_flow(res, kstar)
     tc_dae = tracks.first_collision.time if tracks.events else np.nan
     alive = np.all(np.isfinite(tracks.positions), axis=1)
 
