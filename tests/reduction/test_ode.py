@@ -165,3 +165,23 @@ def test_bad_input(triangle):
         ode.velocity(p[:5])
     with pytest.raises(ValueError, match="t_final"):
         ode.integrate(p, -1.0)
+
+
+@pytest.mark.parametrize("angles, facets", [([130, 120, 110], [0.3, 0.4, 0.5]),
+                                            ([90, 90, 80, 100], [0.5, 0.28, 0.5, 0.35])])
+def test_galerkin_identity_with_full_normal_velocity(angles, facets):
+    # <V^n, phi_j^perp> = -dE/dp_j on the tangent space: V^n from qsa.energies (e:Facet-NV)
+    # on the splice curve, phi from the ODE's own pull-back -- independent code paths
+    L = splice_polygon(np.deg2rad(angles), facets, ALPHA, kstar=KSTAR).params["L"]
+    ode = FrontODE(ALPHA, KSTAR, L, points_per_width=8)
+    eq = splice_polygon(np.deg2rad(angles), facets, ALPHA, kstar=KSTAR, grid=ode.grid)
+    p, cut = np.array(eq.params["positions"]), tuple(eq.params["cutoff"])
+    V = eq.energy.normal_velocity(eq.curve)
+    phi, w = ode.normal_velocities(p, cut)
+    T = ode.tangent_basis(p, cut)
+    proj = (V * w) @ phi @ T
+    grad = ode.gradient(p, cut) @ T
+    assert np.max(np.abs(proj + grad)) < 1e-5 * np.max(np.abs(grad))
+    # the splice's V^n is mostly off the tangent space (fast): the reduction keeps its
+    # projection only
+    assert np.max(np.abs(V)) > 10 * np.max(np.abs(grad))
