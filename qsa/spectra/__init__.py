@@ -19,7 +19,12 @@ from qsa.spectra.eigen import (
     small_cluster,
     spectrum,
 )
-from qsa.spectra.hessian import LagrangeHessian, hessian, lagrange_hessian
+from qsa.spectra.hessian import (
+    DENSE_CONSTRAINT_LIMIT,
+    LagrangeHessian,
+    hessian,
+    lagrange_hessian,
+)
 from qsa.spectra.linearization import (
     GAUGES,
     linearization,
@@ -29,6 +34,7 @@ from qsa.spectra.linearization import (
 )
 
 __all__ = [
+    "DENSE_CONSTRAINT_LIMIT",
     "GAUGES",
     "KernelReport",
     "LagrangeHessian",

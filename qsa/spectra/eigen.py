@@ -17,13 +17,14 @@ shift-invert (the ``k`` eigenvalues nearest a shift ``sigma``):
 Kernel tolerance (documented, explicit): an eigenvalue counts as *kernel* when
 ``|lambda| <= kernel_tol``, with (unless given)
 
-    kernel_tol = 10 * max(max |rho_j|, eps * |J|),
+    kernel_tol = max(10 max |rho_j|, eps |J|),
 
 ``rho_j`` the Ritz values of ``J`` on the span of the normal components of the
 rigid motions (exactly 0 in the continuum, ``ker J``; their size is the
 discretization defect of the kernel, second order in the eigenvector error) and
-``eps |J|`` the round-off of a backward-stable eigen-solver (``|J|`` the operator
-norm in ``<.,.>``). For the non-normal 2N x 2N gauges (``"comoving"``,
+``eps |J|`` the round-off bound of a backward-stable eigen-solver (``|J|`` the
+operator norm in ``<.,.>``, estimated by power iteration; for the smooth low modes the
+observed error is 10-100 times below this bound). For the non-normal 2N x 2N gauges (``"comoving"``,
 ``"paper"``), whose kernel is (nearly) defective, the floor is raised to
 ``10 sqrt(eps) |J|``. ``n_unstable`` counts the accepted eigenvalues with
 ``Re lambda > kernel_tol``.
@@ -185,6 +186,12 @@ class Spectrum:
     sigma : float or None
     N, N2 : int
         Resolution, and the second resolution (None if not used).
+    roundoff : float
+        ``eps |J|`` (``|J|`` the ``<.,.>`` operator norm): the absolute round-off
+        level of every computed eigenvalue. ``J`` is a differential operator of
+        order 6 for the faceting energy (4 for Canham-Helfrich), so this grows like
+        ``N^6``: eigenvalues below it are noise (the message says so). Use the
+        smallest N that resolves the fronts (MATH.md section 4).
     max_imag : float
         ``max |Im lambda| / max(|lambda|)`` before taking real parts (0 for ``"normal"``).
     asymmetry : float
@@ -213,6 +220,7 @@ class Spectrum:
     sigma: float | None
     N: int
     N2: int | None
+    roundoff: float
     max_imag: float
     asymmetry: float
     multipliers: np.ndarray
@@ -242,7 +250,7 @@ class Spectrum:
             "eigenvalues": num(ev), "n_unstable": self.n_unstable, "n_kernel": self.n_kernel,
             "kernel_tol": self.kernel_tol, "n_small": self.n_small,
             "gap_ratio": self.gap_ratio, "n_spurious": int(self.spurious.size),
-            "max_imag": self.max_imag, "asymmetry": self.asymmetry,
+            "roundoff": self.roundoff, "max_imag": self.max_imag, "asymmetry": self.asymmetry,
             "multipliers": [float(x) for x in self.multipliers],
             "projection_residual": self.projection_residual,
             "relative_residual": self.relative_residual,
@@ -313,7 +321,7 @@ def _smooth_random(curve: Curve, modes=8, seed=1):
 
 
 def _kernel_tolerance(curve, J, normJ, basis):
-    """``(kernel_tol, defect)``: ``10 max(max |Ritz values of J on the rigid span|, eps |J|)``.
+    """``(kernel_tol, defect)``: ``max(10 max |Ritz values of J on the rigid span|, eps |J|)``.
 
     ``defect[j] = |J phi_j|`` for the orthonormal rigid normal basis ``phi_j``.
     """
@@ -323,7 +331,7 @@ def _kernel_tolerance(curve, J, normJ, basis):
     if basis.shape[0]:
         B = (basis * curve.dsigma) @ JB.T
         ritz = np.linalg.eigvalsh(0.5 * (B + B.T))
-    return 10.0 * max(np.max(np.abs(ritz)), _EPS * normJ), defect
+    return max(10.0 * np.max(np.abs(ritz)), _EPS * normJ), defect
 
 
 def _build_kernel_report(energy, curve, LH, J, normJ, eigenvalues, kernel_tol, basis, defect):
@@ -358,7 +366,7 @@ def _build_kernel_report(energy, curve, LH, J, normJ, eigenvalues, kernel_tol, b
     notes = []
     if inner_norm(curve, x) == 0:
         notes.append("nabla_s kappa = 0 (a circle): the kernel element (nabla_s kappa, 0) is void")
-    elif abs(LH.multipliers[2]) > 0:
+    elif pred > max(1e-10, 10 * lag):
         notes.append(
             f"Lambda_3 = {LH.multipliers[2]:.6g} != 0, so nabla^2 E (nabla_s kappa, 0) = "
             "(nabla_s d_kE, d_kE nabla_s kappa / g) is not 0: the kernel element belongs to "
@@ -646,7 +654,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     normJ = operator_norm(curve, J)
     basis = _rigid_normal_basis(curve)
     tol, defect = _kernel_tolerance(curve, J, normJ, basis)
-    if gauge == "comoving" or gauge == "paper":
+    nonnormal = gauge in ("comoving", "paper")
+    if nonnormal and k is not None:
         # non-normal 2N x 2N: its kernel is (nearly) defective, round-off ~ sqrt(eps)
         tol = max(tol, 10 * np.sqrt(_EPS) * normJ)
     if kernel_tol is not None:
@@ -672,9 +681,16 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         return Spectrum(empty, np.zeros((curve.N, 0)), 0, 0, float(tol), 0, np.nan, kr, empty,
                         empty,
                         gauge, "dense" if k is None else "shift-invert", sigma, curve.N, None,
-                        np.nan, np.nan, LH.multipliers, LH.projection_residual,
+                        float(_EPS * normJ), np.nan, np.nan, LH.multipliers,
+                        LH.projection_residual,
                         LH.relative_residual, False, 2, f"eigen-solver failed: {exc}")
     vals, vecs = _sort(vals, vecs)
+    if nonnormal and k is None and kernel_tol is None:
+        # a (nearly) defective kernel perturbed by eps |calL| splits like sqrt(eps |calL| rho),
+        # rho = the smallest non-kernel |lambda| of J (the scale of the coupled modes)
+        lamJ = np.abs(sla.eigvalsh(to_dense(symmetric_form(curve, J))))
+        rho = np.min(lamJ[lamJ > tol], initial=np.max(lamJ, initial=1.0))
+        tol = max(tol, 10 * float(np.sqrt(_EPS * np.max(np.abs(vals)) * rho)))
 
     spurious = np.array([], dtype=vals.dtype)
     drift = np.full(vals.size, np.nan)
@@ -700,8 +716,17 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     n_kernel = int(np.sum(np.abs(vals) <= tol))
     kvals = vals if gauge == "normal" else None
     kr = _build_kernel_report(energy, curve, LH, J, normJ, kvals, tol, basis, defect)
-    if gauge == "normal" and k is None and kr.kernel_dimension != kr.expected_kernel_dimension:
-        notes.append(kr.notes[-1])
+    expected = kr.expected_kernel_dimension + {"comoving": curve.N, "paper": curve.N,
+                                               "scaled": 1}.get(gauge, 0)
+    if n_kernel != expected and (k is None or n_kernel > expected):
+        why = ("the 2N x 2N operator has spurious eigenvalues from under-resolved "
+               "reparameterization modes (MATH.md section 4): prefer gauge='normal'"
+               if nonnormal else
+               f"round-off eps |J| = {_EPS * normJ:.2e}; J has order 6 for faceting, so small "
+               "eigenvalues drown in round-off at large N: use the smallest N that resolves "
+               "the fronts")
+        notes.append(f"{n_kernel} eigenvalues within kernel_tol = {tol:.2e}, {expected} "
+                     f"expected ({why})")
     msg = (f"{gauge} gauge, {'dense' if k is None else f'shift-invert (k={k}, sigma={sigma})'}"
            f": {vals.size} eigenvalues, {n_unstable} unstable, {n_kernel} in the kernel "
            f"(|lambda| <= {tol:.2e})")
@@ -713,5 +738,6 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     return Spectrum(vals, vecs, n_unstable, n_kernel, float(tol), n_small, gap, kr, spurious,
                     drift, gauge,
                     "dense" if k is None else "shift-invert", sigma, curve.N, N2,
-                    float(max_imag), float(asym), LH.multipliers, LH.projection_residual,
+                    float(_EPS * normJ), float(max_imag), float(asym), LH.multipliers,
+                    LH.projection_residual,
                     LH.relative_residual, True, status, msg)

@@ -127,11 +127,12 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     constraints : {"auto", "all", "curvature"}
         Which constraint Hessians to subtract. ``"all"``: all three (``C_1, C_2`` are
         dense, O(N^2) memory). ``"curvature"``: only ``Lambda_3 nabla^2 C_3`` (sparse).
-        ``"auto"`` (default): all three on Fourier grids and for ``N <=``
-        :data:`DENSE_CONSTRAINT_LIMIT`; otherwise ``C_1, C_2`` are dropped when
-        ``|Lambda_{1,2}| |Psi_{1,2}| <= 1e-8 |nabla_I E|`` (for the local energies here
-        ``Lambda_{1,2} = 0`` at equilibria, MATH.md section 4), and a ``ValueError`` is
-        raised if they are not negligible.
+        ``"auto"`` (default): ``C_3`` always; ``C_1, C_2`` only when significant,
+        ``|Lambda_j Psi_j| > max(|nabla_I E - Lambda . Psi|, 1e-8 |nabla_I E|)`` (else
+        the term is below the accuracy of the projection itself; for the local
+        energies here ``Lambda_{1,2} = 0`` at equilibria, MATH.md section 4). If they
+        are significant on a sparse grid with ``N >`` :data:`DENSE_CONSTRAINT_LIMIT`,
+        a ``ValueError`` is raised (use ``"all"``).
 
     Returns
     -------
@@ -169,17 +170,14 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     vrel = vres / residual_scale(energy, curve)
 
     dense_ok = (not curve.grid.sparse) or curve.N <= DENSE_CONSTRAINT_LIMIT
-    if constraints == "all" or (constraints == "auto" and dense_ok):
-        use12 = True
-    else:
-        use12 = False
-        gnorm = inner_norm(curve, grad)
-        big = [abs(Lam[j]) * inner_norm(curve, Psi[j]) > 1e-8 * gnorm for j in range(2)]
-        if constraints == "auto" and any(big):
-            raise ValueError(
-                f"curve: Lambda_1,2 = {Lam[:2]} are not negligible, so L_Lambda needs the dense "
-                f"constraint Hessians of C_1, C_2 (N = {curve.N} > {DENSE_CONSTRAINT_LIMIT}); "
-                "pass constraints='all' to assemble them anyway")
+    floor = max(res_abs, 1e-8 * inner_norm(curve, grad))
+    significant = any(abs(Lam[j]) * inner_norm(curve, Psi[j]) > floor for j in range(2))
+    use12 = constraints == "all" or (constraints == "auto" and significant)
+    if constraints == "auto" and significant and not dense_ok:
+        raise ValueError(
+            f"curve: Lambda_1,2 = {Lam[:2]} are not negligible, so L_Lambda needs the dense "
+            f"constraint Hessians of C_1, C_2 (N = {curve.N} > {DENSE_CONSTRAINT_LIMIT}); "
+            "pass constraints='all' to assemble them anyway")
     Hc = constraint_hessians(curve) if use12 else [None, None, _hc3(curve)]
     L = H
     for j in (2, 0, 1) if use12 else (2,):
@@ -191,7 +189,7 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
            f"({vrel:.1e} of the largest term)")
     if not use12:
         msg += (f"; Lambda_1,2 terms omitted (|Lambda_1,2| = {np.abs(Lam[:2]).max():.1e}, "
-                "negligible)")
+                "below the projection's accuracy)")
     return LagrangeHessian(L, H, Lam, res_abs, res_rel, vres, vrel, included, msg)
 
 

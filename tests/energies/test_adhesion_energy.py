@@ -36,6 +36,52 @@ def test_velocity_is_energy_derivative(l_star):
     assert num == pytest.approx(ana, rel=1e-6)
 
 
+def test_intrinsic_gradient_is_directional_derivative():
+    """d/dd E(U + d U1) = <grad_I E, U1> for U1 tangent to the closed manifold.
+
+    U1 is a random smooth intrinsic perturbation with its span-Psi part removed
+    (the intrinsic gradient is defined modulo ker M-dagger = span Psi);
+    positions come from integrating (kappa, g) (measured relative error 7e-10
+    at N = 321, 2e-7 at N = 161).
+    """
+    c = random_curve(7, Fourier(321))
+    E = Adhesion(A0=10.0, l_star=0.3, a=1.0)
+    rng = np.random.default_rng(0)
+    s = c.grid.s
+    U1 = np.concatenate([
+        sum(rng.normal() * np.cos(2 * np.pi * k * s + rng.uniform(0, 6)) for k in range(1, 5)),
+        0.3 * sum(rng.normal() * np.cos(2 * np.pi * k * s + rng.uniform(0, 6)) for k in range(4)),
+    ])
+    Psi = geometry.constraint_gradients(c)
+    G = np.array([[inner(c, p, q) for q in Psi] for p in Psi])
+    U1 = U1 - np.linalg.solve(G, [inner(c, p, U1) for p in Psi]) @ Psi
+    d = 1e-5
+    num = (E.energy(c.with_U(c.U + d * U1)) - E.energy(c.with_U(c.U - d * U1))) / (2 * d)
+    ana = inner(c, E.gradient(c), U1)
+    assert abs(ana) > 0.1
+    assert num == pytest.approx(ana, rel=1e-7)
+
+
+def test_tangential_motion_does_not_change_the_energy():
+    """Velocity V n + T tau: dE/dt = <A.n + kappa B, V>; T contributes only quadrature error."""
+    c = random_curve(8, Fourier(321))
+    E = Adhesion(A0=10.0, l_star=0.3, a=1.0)
+    x, y = c.positions()
+    tau, n = c.tangent(), c.normal()
+    s = c.grid.s
+    V = np.cos(2 * np.pi * s) + 0.3
+    T = 5 * np.sin(4 * np.pi * s + 0.2)
+
+    def energy_after(t):
+        return E.energy(Curve.from_positions(x + t * (V * n[0] + T * tau[0]),
+                                             y + t * (V * n[1] + T * tau[1]), c.grid))
+
+    dt = 1e-5
+    num = (energy_after(dt) - energy_after(-dt)) / (2 * dt)
+    ana = inner(c, E.extrinsic_gradient(c)[: c.N], V)
+    assert num == pytest.approx(ana, rel=1e-7)
+
+
 @pytest.mark.parametrize("seed", [2, 3, 4])
 def test_rigid_invariance_identities(seed):
     """The extrinsic gradient is orthogonal to ker M; grad_s B = A.tau (MATH.md section 6).

@@ -72,8 +72,8 @@ def test_helfrich_circle_fourier(R, eps, beta):
 
 
 @pytest.mark.parametrize("gauge", ["comoving", "scaled"])
-def test_comoving_and_scaled_nonzero_eigenvalues_match_J(gauge):
-    R, alpha, kstar, beta = 0.7, 0.1, 5.0, 5.0
+@pytest.mark.parametrize("R, alpha, kstar, beta", FACETING_CASES[:3])
+def test_comoving_and_scaled_nonzero_eigenvalues_match_J(gauge, R, alpha, kstar, beta):
     N = 25
     eq = circle(R, alpha, grid=Fourier(N), beta=beta, kstar=kstar)
     s = spectrum(eq.energy, eq.curve, gauge=gauge)
@@ -108,6 +108,45 @@ def test_paper_gauge_has_spurious_positive_eigenvalues_on_a_stable_circle():
     Lp = linearization(eq.energy, eq.curve, "paper")
     Lc = linearization(eq.energy, eq.curve, "comoving")
     assert np.linalg.norm(Lp - Lc) > 1e-3 * np.linalg.norm(Lc)
+
+
+def test_helfrich_circle_comoving_fourier():
+    R, eps, beta, N = 0.6, 0.5, 3.0, 31
+    energy, c = helfrich_circle(R, eps, beta, Fourier(N))
+    s = spectrum(energy, c, gauge="comoving")
+    exact, _ = helfrich_circle_eigenvalues(R, eps, beta, (N - 1) // 2)
+    nz = np.sort(exact[exact != 0])
+    big = np.sort(s.eigenvalues[np.abs(s.eigenvalues) > s.kernel_tol])
+    assert np.all(np.abs(big - nz) <= 1e-8 * np.abs(nz))
+    assert s.n_kernel == N + 2 and s.n_unstable == 0
+
+
+def _fd_low_mode_errors(make, lam0, gauge, modes, Ns):
+    errs = []
+    for N in Ns:
+        energy, c = make(FiniteDifference(N))
+        s = spectrum(energy, c, gauge=gauge)
+        errs.append(max(np.min(np.abs(s.eigenvalues - lam0[k])) / abs(lam0[k]) for k in modes))
+    return errs
+
+
+@pytest.mark.parametrize("gauge", ["normal", "comoving"])
+def test_fd_circle_second_order_both_energies(gauge):
+    Ns = [64, 128, 256]
+    modes = [0, 2, 3, 4, 5]
+    R, alpha, kstar, beta = 1.3, 0.2, 3.0, 2.0
+
+    def facet(grid):
+        eq = circle(R, alpha, grid=grid, beta=beta, kstar=kstar)
+        return eq.energy, eq.curve
+
+    _, lam0 = faceting_circle_eigenvalues(R, alpha, kstar, beta, 6)
+    errs = _fd_low_mode_errors(facet, lam0, gauge, modes, Ns)
+    assert fitted_order(Ns, errs) == pytest.approx(2.0, abs=0.2)
+    _, lam0 = helfrich_circle_eigenvalues(0.6, 0.5, 3.0, 6)
+    errs = _fd_low_mode_errors(lambda grid: helfrich_circle(0.6, 0.5, 3.0, grid), lam0, gauge,
+                               modes, Ns)
+    assert fitted_order(Ns, errs) == pytest.approx(2.0, abs=0.2)
 
 
 def test_fd_circle_second_order():

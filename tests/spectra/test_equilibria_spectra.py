@@ -74,7 +74,13 @@ def test_energy_hessian_kernel_fails_when_lambda3_nonzero():
 def test_lagrange_hessian_reports_multipliers_and_residuals(triangle):
     LH = lagrange_hessian(triangle.energy, triangle.curve)
     assert np.allclose(LH.multipliers, triangle.multipliers, atol=1e-9)
-    assert LH.relative_residual < 1e-8 and LH.constraints_included == (True, True, True)
+    assert LH.relative_residual < 1e-8
+    # Lambda_1,2 = 0 at the equilibrium (round-off): their dense Hessians are skipped, and
+    # including them changes L by no more than their size
+    assert LH.constraints_included == (False, False, True)
+    full = lagrange_hessian(triangle.energy, triangle.curve, constraints="all")
+    assert full.constraints_included == (True, True, True)
+    assert np.max(np.abs(full.matrix - LH.matrix)) <= 1e-9 * np.max(np.abs(LH.matrix))
     # dsigma-self-adjoint: W2 L symmetric
     w2 = np.concatenate([triangle.curve.dsigma] * 2)
     WL = w2[:, None] * LH.matrix
@@ -220,3 +226,25 @@ def test_far_from_equilibrium_warns_with_projection_residual():
     assert s.relative_residual > 1e-3 and s.projection_residual > 0
     with pytest.warns(NotEquilibriumWarning):
         spectrum(eq.energy, c, equilibrium_tol=1e-6)
+
+
+def test_comoving_and_scaled_gauges_at_the_npulse(triangle, triangle_spectrum):
+    """Non-zero eigenvalues of -M M-dagger L_Lambda and of the scaled quotient are J's.
+
+    The scaled quotient reproduces J (plus the shift mode in its kernel); the 2N x 2N
+    comoving operator has extra eigenvalues from under-resolved reparameterization
+    modes, which the two-resolution check rejects.
+    """
+    ref = spectrum(triangle.energy, triangle.curve, reject_spurious=False)
+    lamJ = ref.eigenvalues
+    sc = spectrum(triangle.energy, triangle.curve, gauge="scaled", reject_spurious=False)
+    assert sc.n_kernel == 4 and sc.n_unstable == ref.n_unstable == 3
+    big = sc.eigenvalues[np.abs(sc.eigenvalues) > sc.kernel_tol]
+    refbig = lamJ[np.abs(lamJ) > ref.kernel_tol]
+    assert np.allclose(np.sort(big)[-20:], np.sort(refbig)[-20:], rtol=1e-7)
+    co = spectrum(triangle.energy, triangle.curve, gauge="comoving")
+    assert co.n_unstable == 3 and co.spurious.size > 0
+    assert "under-resolved reparameterization" in co.message
+    kept = co.eigenvalues[np.abs(co.eigenvalues) > co.kernel_tol]
+    err = np.array([np.min(np.abs(lamJ - x)) / abs(x) for x in kept])
+    assert np.all(err < 1e-6)

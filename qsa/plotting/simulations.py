@@ -1,0 +1,235 @@
+"""Figures of the paper's simulations (f:facet, f:facet_energy, f:Snowflake, f:fold).
+
+The drawing functions take plain arrays; ``facet_figures``, ``cha_figures``
+and ``folding_figure`` take the ``arrays``/``summary`` of a
+:class:`qsa.flows.paper_runs.RunOutput` (or the same dictionaries loaded from
+its ``.npz``/``.json`` files).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from qsa.plotting._core import new_figure
+
+__all__ = [
+    "plot_facet_panels",
+    "plot_energy_residual",
+    "plot_front_count",
+    "plot_shaded_curve",
+    "plot_energy_history",
+    "facet_figures",
+    "cha_figures",
+    "folding_figure",
+]
+
+
+def _nearest(times, t):
+    return int(np.argmin(np.abs(np.asarray(times) - t)))
+
+
+def _reached(times, snap_t, t_reached, n=5):
+    """The requested times the run reached, or ``n`` snapshots spread over a short run."""
+    out = [t for t in times if t <= t_reached * 1.0001]
+    if len(out) >= 2:
+        return out
+    snap_t = np.asarray(snap_t)
+    return list(snap_t[np.unique(np.linspace(0, snap_t.size - 1, n).round().astype(int))])
+
+
+def _closed(a):
+    return np.append(a, a[0])
+
+
+def plot_facet_panels(snap_t, xs, ys, kappas, times, kstar=None):
+    """Curves (top row) and ``kappa(s)`` (bottom row) at the snapshots nearest ``times``.
+
+    The open circle marks ``gamma(0)`` (as in f:facet).
+
+    Parameters
+    ----------
+    snap_t : ndarray, shape (n,)
+    xs, ys, kappas : ndarray, shape (n, N)
+    times : sequence of float
+    kstar : float, optional
+        Draws the wells ``0`` and ``kappa*`` as dotted lines.
+
+    Returns
+    -------
+    Figure
+    """
+    fig, axes = new_figure(ncols=len(times), nrows=2, size=(2.6, 2.4))
+    axes = np.atleast_2d(axes).reshape(2, len(times))
+    N = np.shape(kappas)[1]
+    s = np.arange(N + 1) / N
+    for col, t in enumerate(times):
+        i = _nearest(snap_t, t)
+        ax = axes[0, col]
+        ax.plot(_closed(xs[i]), _closed(ys[i]), color="C0", lw=1.2)
+        ax.plot(xs[i][0], ys[i][0], "o", mfc="none", color="C0")
+        ax.set_aspect("equal")
+        ax.set_title(f"t = {snap_t[i]:.3g}", fontsize=9)
+        ax.tick_params(labelsize=7)
+        ax = axes[1, col]
+        ax.plot(s, _closed(kappas[i]), color="C1", lw=1.0)
+        if kstar is not None:
+            for level in (0.0, kstar):
+                ax.axhline(level, color="0.6", ls=":", lw=0.8)
+        ax.set_xlim(0, 1)
+        ax.set_xlabel("s", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[1, 0].set_ylabel(r"$\kappa$")
+    return fig
+
+
+def _time_axes(ax, size, t, events):
+    """Figure/axes with a log time axis, the ``t > 0`` mask and dashed event lines."""
+    if ax is None:
+        fig, ax = new_figure(size=size)
+    else:
+        fig = ax.figure
+    ax.set_xscale("log")
+    ax.set_xlabel("t")
+    for te in events:
+        ax.axvline(te, color="0.7", lw=0.6, ls="--")
+    t = np.asarray(t, dtype=float)
+    return fig, ax, t, t > 0
+
+
+def plot_energy_residual(t, energy, residual, events=(), ax=None):
+    """Energy (blue) and functional residual ``R_kappa`` (red), log scale, vs time (f:facet_energy).
+
+    Time is drawn on a log axis as well (the events span five decades);
+    ``events`` are marked by vertical lines.
+    """
+    fig, ax, t, keep = _time_axes(ax, (6.0, 4.0), t, events)
+    ax.semilogy(t[keep], np.asarray(energy)[keep], color="C0", label="energy")
+    ax.set_ylabel("energy", color="C0")
+    ax2 = ax.twinx()
+    ax2.semilogy(t[keep], np.asarray(residual)[keep], color="C3", lw=0.8,
+                 label=r"$R_\kappa$")
+    ax2.set_ylabel(r"$R_\kappa = \max|\mu - \langle\mu\rangle|$", color="C3")
+    return fig
+
+
+def plot_front_count(t, fronts, events=(), ax=None):
+    """Number of fronts (crossings of ``kappa*/2``) against time (log time axis)."""
+    fig, ax, t, keep = _time_axes(ax, (6.0, 3.0), t, events)
+    ax.step(t[keep], np.asarray(fronts)[keep], where="post", color="C2")
+    ax.set_ylabel("fronts")
+    return fig
+
+
+def plot_shaded_curve(x, y, ax=None, title=None, color="C0"):
+    """A closed curve with its interior shaded (f:Snowflake, f:fold).
+
+    The interior is filled with the even-odd rule, so a self-intersecting
+    polygon shows its overlap unshaded.
+    """
+    if ax is None:
+        _, ax = new_figure(size=(3.0, 3.0))
+    ax.fill(_closed(x), _closed(y), color=color, alpha=0.35, lw=0)
+    ax.plot(_closed(x), _closed(y), color=color, lw=0.6)
+    ax.set_aspect("equal")
+    ax.tick_params(labelsize=7)
+    if title:
+        ax.set_title(title, fontsize=9)
+    return ax
+
+
+def plot_energy_history(t, energy, ax=None, label=None, color="C0"):
+    """Semi-log energy against time (log time axis; ``t > 0`` only)."""
+    if ax is None:
+        fig, ax = new_figure(size=(6.0, 3.0))
+    else:
+        fig = ax.figure
+    t = np.asarray(t, dtype=float)
+    keep = t > 0
+    ax.plot(t[keep], np.asarray(energy)[keep], color=color, label=label)
+    ax.set_xscale("log")
+    ax.set_yscale("log" if np.all(np.asarray(energy)[keep] > 0) else "linear")
+    ax.set_xlabel("t")
+    ax.set_ylabel("energy")
+    return fig
+
+
+# ------------------------------------------------------------ run outputs
+def facet_figures(arrays, summary):
+    """The facet run's figures: ``{"panels", "energy", "fronts"}``."""
+    N = int(summary["params"]["N"])
+    Y = np.asarray(arrays["snap_states"])
+    xs, ys, ks = Y[:, :N], Y[:, N : 2 * N], Y[:, 2 * N : 3 * N]
+    times = _reached(summary["params"]["figure_times"], arrays["snap_t"], summary["t_reached"])
+    events = [e["t"] for e in summary["events"]]
+    panels = plot_facet_panels(arrays["snap_t"], xs, ys, ks, times,
+                               kstar=summary["params"]["kstar"])
+    panels.suptitle(f"faceting coarsening: alpha={summary['params']['alpha']:g}, "
+                    f"beta={summary['params']['beta']:g}, kappa*={summary['params']['kstar']:g},"
+                    f" N={N}")
+    energy = plot_energy_residual(arrays["t"], arrays["energy"], arrays["R_kappa"], events)
+    fronts = plot_front_count(arrays["t"], arrays["fronts"], events)
+    return {"panels": panels, "energy": energy, "fronts": fronts}
+
+
+def cha_figures(arrays, summary, times=None):
+    """A CHA run's figures: ``{"snapshots", "energy"}`` (f:Snowflake layout).
+
+    Snapshots at ``times`` (default: the scenario's figure times), shaded,
+    three per row, and the energy against time below.
+    """
+    times = list(summary["params"]["figure_times"] if times is None else times)
+    times = _reached(times, arrays["snap_t"], summary["t_reached"])
+    ncols = 3
+    nrows = -(-len(times) // ncols)
+    fig, axes = new_figure(ncols=ncols, nrows=nrows + 1, size=(3.0, 3.0))
+    axes = np.atleast_2d(axes)
+    snap_t = np.asarray(arrays["snap_t"])
+    xs, ys = np.asarray(arrays["snap_x"]), np.asarray(arrays["snap_y"])
+    for k, ax in enumerate(axes[:nrows].ravel()):
+        if k >= len(times):
+            ax.set_visible(False)
+            continue
+        if times[k] == 0 and "x0" in arrays:
+            x, y, t = arrays["x0"], arrays["y0"], 0.0
+        else:
+            i = _nearest(snap_t, times[k])
+            x, y, t = xs[i], ys[i], snap_t[i]
+        plot_shaded_curve(x, y, ax=ax, title=f"t = {t:.4g}")
+    gs = axes[-1, 0].get_gridspec()
+    for ax in axes[-1]:
+        ax.remove()
+    ax = fig.add_subplot(gs[-1, :])
+    plot_energy_history(arrays["t_steps"], arrays["energy_steps"], ax=ax)
+    rho = summary["params"]["rho"]
+    fig.suptitle(f"CHA flow, rho = {rho:g} (Table T1), N = {summary['params']['N']}")
+    return {"snapshots": fig}
+
+
+def folding_figure(runs, times=(0.02, 0.3, None)):
+    """f:fold: rows = runs (increasing rho), columns = short, mid and final time; energies below.
+
+    Parameters
+    ----------
+    runs : list of (arrays, summary)
+    times : sequence
+        Column times; ``None`` means the final state.
+    """
+    nrows = len(runs)
+    fig, axes = new_figure(ncols=len(times), nrows=nrows + 1, size=(3.0, 3.0))
+    axes = np.atleast_2d(axes)
+    for r, (arrays, summary) in enumerate(runs):
+        snap_t = np.asarray(arrays["snap_t"])
+        for c, t in enumerate(times):
+            i = len(snap_t) - 1 if t is None else _nearest(snap_t, t)
+            title = f"rho={summary['params']['rho']:g}, t={snap_t[i]:.3g}"
+            plot_shaded_curve(arrays["snap_x"][i], arrays["snap_y"][i], ax=axes[r, c],
+                              title=title, color=f"C{r}")
+    gs = axes[-1, 0].get_gridspec()
+    for ax in axes[-1]:
+        ax.remove()
+    ax = fig.add_subplot(gs[-1, :])
+    for r, (arrays, summary) in enumerate(runs):
+        plot_energy_history(arrays["t_steps"], arrays["energy_steps"], ax=ax,
+                            label=f"rho={summary['params']['rho']:g}", color=f"C{r}")
+    ax.legend(fontsize=8)
+    return fig

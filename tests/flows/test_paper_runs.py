@@ -1,0 +1,138 @@
+"""The paper's simulations: short versions (default suite) and full runs (slow)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from qsa.curve import polygon_self_intersects
+from qsa.flows.paper_runs import resolution_check, run_cha, run_facet
+from qsa.flows.scenarios import CHAScenario, FacetScenario
+from qsa.io import load_npz
+
+# a small CHA scenario (5 lobes, l* = 0.05) that N = 128 resolves: seconds, not minutes
+SMALL_CHA = CHAScenario(r0=0.3, lobes=5, N=128, l_star=0.05, t_final=1e-4, rho=1.3)
+
+
+def chords(x, y):
+    return np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
+
+
+def test_facet_initial_data_in_the_spinodal_range():
+    sc = FacetScenario()
+    x, y = sc.initial()
+    c = chords(x, y)
+    assert x.size == 600 and np.ptp(c) < 1e-10 * c.mean()
+    lo, hi = sc.spinodal_range()
+    assert lo < 1 / sc.R < hi
+    r = np.hypot(x, y)
+    assert np.max(np.abs(r / sc.R - 1)) < 20 * sc.noise
+
+
+def test_cha_initial_data_is_the_crenellated_curve():
+    sc = CHAScenario()
+    x, y = sc.initial()
+    r, th = np.hypot(x, y), np.arctan2(y, x)
+    expected = 0.6 * (1 + 0.4 * np.tanh(3 * np.cos(13 * th)) / math.tanh(3))
+    assert np.max(np.abs(r - expected)) < 1e-6
+    L = chords(x, y).sum()
+    assert L / sc.N < sc.l_star  # the kernel is resolved at the start
+    assert sc.rho * L / sc.N < sc.l_star  # ... and at the target length
+    assert not polygon_self_intersects(x, y)
+    assert sc.pair_separation() == pytest.approx(0.01 * math.sqrt(1.5))
+
+
+def test_facet_short_run_writes_outputs_and_resumes(tmp_path):
+    sc = FacetScenario(t_final=3e-5)
+    out = run_facet(sc, str(tmp_path), spinodal_time=1e-5, spinodal_step=2e-6,
+                    progress=False, n_snapshots=5)
+    s = out.summary
+    assert s["success"] and s["t_reached"] == pytest.approx(3e-5)
+    E = out.arrays["energy"]
+    assert E[-1] < E[0] and np.all(np.diff(E) <= 1e-9 * E[0])
+    # invariants of the DAE state: equal chords of length L/N, curvature from positions
+    y = out.result.states[-1]
+    u = out.result.system.unpack(y)
+    c = chords(u["x"], u["y"])
+    assert np.max(np.abs(c - u["L"] / sc.N)) < 1e-8
+    # outputs
+    files = {p.name for p in tmp_path.iterdir()}
+    assert {"facet.npz", "facet.json", "facet_checkpoint.npz", "facet_stage1.npz"} <= files
+    summary = json.loads((tmp_path / "facet.json").read_text())
+    assert summary["params"]["alpha"] == 0.1 and summary["params"]["N"] == 600
+    arrays, _ = load_npz(tmp_path / "facet.npz")
+    assert arrays["t"].size == arrays["fronts"].size == arrays["energy"].size
+    # resume to a later time continues the series without restarting
+    n_before = arrays["t"].size
+    more = run_facet(FacetScenario(t_final=4e-5), str(tmp_path), resume=True,
+                     spinodal_time=1e-5, progress=False, n_snapshots=5)
+    t = more.arrays["t"]
+    assert more.summary["t_reached"] == pytest.approx(4e-5)
+    assert t.size > n_before and np.all(np.diff(t) > 0)
+
+
+def test_cha_short_run_monitors_and_writes(tmp_path):
+    out = run_cha(SMALL_CHA, str(tmp_path), progress=False, snapshot_times=[5e-5, 1e-4])
+    s = out.summary
+    assert s["success"]
+    E = out.arrays["energy"]
+    assert E[-1] < E[0]
+    assert s["self_intersection"]["detected"] is False
+    assert out.arrays["approach"].size == out.arrays["t"].size
+    assert s["separation_target"] == pytest.approx(0.05 * math.sqrt(1.5))
+    name = s["scenario"]
+    for suffix in (".npz", ".json", "_checkpoint.npz", "_series.npz"):
+        assert (tmp_path / f"{name}{suffix}").is_file()
+    # length constraint: equal chords L/N
+    x, y = out.result.x, out.result.y
+    assert np.ptp(chords(x, y)) < 1e-8
+
+
+def test_resolution_check_compares_common_nodes():
+    sc = CHAScenario(r0=0.3, lobes=5, N=64, l_star=0.08)
+    rc = resolution_check(sc, t_short=1e-4, progress=False)
+    assert rc["success"] == [True, True] and rc["steps"][0] > 1
+    # second order in space: N = 64 vs 128 differ by a fraction of l*, far below the size
+    assert 0 < rc["max_difference"] < 0.2 * sc.l_star
+
+
+def test_cli_facet_and_snowflake_registered():
+    from qsa.cli import build_parser
+
+    parser = build_parser()
+    for name in ("facet", "snowflake", "folding"):
+        args = parser.parse_args(["reproduce", name, "--json", "--no-plots"])
+        assert callable(args.func)
+
+
+# ------------------------------------------------------------------ full runs
+@pytest.mark.slow
+def test_facet_full(tmp_path):
+    out = run_facet(FacetScenario(), str(tmp_path), progress=False)
+    s = out.summary
+    assert s["peak_fronts"] >= 16 and s["final_fronts"] == 6
+    assert s["final_rotation_defect"] < 1e-3
+    assert s["energy_max_increase"] < 1e-6 * s["final_energy"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rho", [1.2, 1.3, 1.4])
+def test_cha_full(tmp_path, rho):
+    out = run_cha(CHAScenario(rho=rho), str(tmp_path), progress=False)
+    s = out.summary
+    assert s["success"] and s["n_sheet_pairs"] >= 1
+    assert abs(s["separation_ratio"] - 1) < 0.1
+
+
+def test_cli_reproduce_facet_short(tmp_path, capsys):
+    from qsa.cli import main
+
+    png = tmp_path / "panels.png"
+    assert main(["reproduce", "facet", "--t-final", "2e-5", "--out", str(tmp_path / "o"),
+                 "--json", "--plot", str(png)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success"] and out["params"]["kstar"] == 5.0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "o" / "facet_energy.png").is_file()
+    assert (tmp_path / "o" / "facet_fronts.png").is_file()
