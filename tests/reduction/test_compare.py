@@ -39,8 +39,9 @@ def test_short_facet_fast_variant():
 def test_dae_vs_ode_resolved(scenario):
     s = compare_fronts(scenario, N=1200).summary
     assert s["collision_rel_diff"] < 0.1
-    assert s["error_at"]["0.9"] < 0.05
-    assert s["max_error_rescaled"] < 0.1
+    # within 5% of the smallest facet up to 0.95 t_c; beyond, the error grows like
+    # eps / (1 - t/t_c) (see qsa.reduction.ode, "Validity")
+    assert s["error_at"]["0.95"] < 0.05
 
 
 def test_reproduce_fronts_cli(tmp_path, capsys):
