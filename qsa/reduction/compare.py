@@ -183,7 +183,8 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         cross = Q + ((cross - Q + 0.5 * L) % L - 0.5 * L)
         P[: cross.shape[0]] = cross - cross.mean(axis=1, keepdims=True)
     error = np.max(np.abs(P - dae), axis=1) / facet_min
-    tc = np.nanmin([tc_dae, tc_ode])
+    finite = [v for v in (tc_dae, tc_ode) if np.isfinite(v)]
+    tc = min(finite) if finite else np.inf
     before = (t < tc) & np.isfinite(error)
     error_at = {}
     for f in fractions:

@@ -61,3 +61,9 @@ def test_reproduce_fronts_cli(tmp_path, capsys):
     args = parser.parse_args(["reproduce", "fronts", "--N", "10"])
     with pytest.raises(ValueError, match="--N"):
         args.func(args)
+
+
+def test_no_collision_before_t_final():
+    s = compare_fronts("short-facet", N=300, t_final=0.01).summary
+    assert np.isnan(s["collision_dae"]) and np.isnan(s["collision_ode"])
+    assert np.isfinite(s["max_error"]) and s["max_error"] < 0.05
