@@ -117,7 +117,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import cumulative_simpson, solve_ivp
+from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from qsa.discretize import Fourier
@@ -258,15 +258,25 @@ class FrontODE:
         return self._gradient(self._fields(p, cutoff))
 
     def _normal(self, f):
+        # d gamma / d p_j = -int_0^sigma n Theta_j. Theta_j = (periodic) + c_j s, so with
+        # m = int_0^s n ds' (periodic on a closed curve) and
+        # int_0^s s' n ds' = s m - int_0^s m ds', every cumulative integral is of a
+        # periodic function: spectral (Fourier) accuracy, no end corrections.
         theta, Theta, w = f["theta"], f["Theta"], f["w"]
+        L, grid, s = self.length, self.grid, self.grid.s
         tau = np.stack([np.cos(theta), np.sin(theta)], axis=1)
         n = np.stack([tau[:, 1], -tau[:, 0]], axis=1)
-        gamma = self.length * self.grid.cumulative(tau)
-        h = self.length / self.grid.N
-        f2 = np.concatenate([n[:, 0:1] * Theta, n[:, 1:2] * Theta], axis=1)
-        dgamma = -cumulative_simpson(np.vstack([f2, f2[:1]]), dx=h, axis=0, initial=0)[:-1]
-        m = Theta.shape[1]
-        phi = n[:, 0:1] * dgamma[:, :m] + n[:, 1:2] * dgamma[:, m:]
+        c = L * f["dpsi"].mean(axis=0)  # Theta_j(L)
+        periodic = Theta - s[:, None] * c
+        k = Theta.shape[1]
+        mom = grid.cumulative(np.column_stack([tau, n]))  # (gamma, m) / L
+        gamma, m = L * mom[:, :2], mom[:, 2:]
+        sn = s[:, None] * m - grid.cumulative(m)  # int_0^s s' n ds'
+        cum = grid.cumulative(np.concatenate([n[:, 0:1] * periodic, n[:, 1:2] * periodic],
+                                             axis=1))
+        dgx = -L * (cum[:, :k] + sn[:, 0:1] * c)
+        dgy = -L * (cum[:, k:] + sn[:, 1:2] * c)
+        phi = n[:, 0:1] * dgx + n[:, 1:2] * dgy
         R = np.column_stack([n[:, 0], n[:, 1], np.sum(gamma * tau, axis=1)])
         coef = np.linalg.solve(R.T @ (w[:, None] * R), R.T @ (w[:, None] * phi))
         return phi - R @ coef
