@@ -185,3 +185,20 @@ def test_galerkin_identity_with_full_normal_velocity(angles, facets):
     # the splice's V^n is mostly off the tangent space (fast): the reduction keeps its
     # projection only
     assert np.max(np.abs(V)) > 10 * np.max(np.abs(grad))
+
+
+def test_collision_across_the_base_point():
+    # the short facet is the last one: s = 0 lies in its middle, the pair is (last, first)
+    eq = splice_polygon(np.deg2rad([80, 100, 90, 90]), [0.5, 0.35, 0.5, 0.28], ALPHA,
+                        kstar=KSTAR)
+    p = np.array(eq.params["positions"])
+    L = eq.params["L"]
+    ode = FrontODE(ALPHA, KSTAR, L)
+    r = ode.integrate(p, 0.08, rtol=1e-5, max_collisions=1)
+    ev = r.first_collision
+    assert set(ev.fronts) == {0, 7}
+    seg = r.segments[1]
+    q = seg.p[0]
+    assert seg.ids.tolist() == [2, 3, 4, 5, 6, 1]  # the first kept front is up-front 2
+    assert np.all(np.diff(q) > 0) and q[-1] - q[0] < L
+    assert np.linalg.norm(ode.constraints(q, seg.cutoff)[0]) < 1e-10
