@@ -350,17 +350,21 @@ def track_flow(result, kstar, max_jump=None):
 
     Parameters
     ----------
-    result : FlowResult-like
-        With ``t`` and ``states`` (a sequence of ``Curve``), or ``t``, ``kappa``
-        (shape (n_t, N)) and ``L`` (shape (n_t,)).
+    result : FlowResult or similar
+        A :class:`qsa.flows.FlowResult` (``t``, ``states`` and the bound
+        ``system``, whose ``curvature`` and ``length`` unpack a state), or any
+        object with ``t`` and ``states`` given as a sequence of ``Curve``.
     kstar : float
+    max_jump : float, optional
+        See :func:`track_fronts`.
 
     Returns
     -------
     FrontTracks
     """
-    if hasattr(result, "kappa") and hasattr(result, "L"):
-        return track_fronts(result.t, list(np.asarray(result.kappa)), kstar, list(result.L),
-                            max_jump)
-    states = list(result.states)
-    return track_fronts(result.t, states, kstar, None, max_jump)
+    system = getattr(result, "system", None)
+    if system is not None:
+        kappas = [system.curvature(y) for y in result.states]
+        lengths = [system.length(y) for y in result.states]
+        return track_fronts(result.t, kappas, kstar, lengths, max_jump)
+    return track_fronts(result.t, list(result.states), kstar, None, max_jump)

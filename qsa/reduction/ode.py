@@ -78,12 +78,38 @@ lambda`` for the quartic well) -- the splice manifold ends: the pair is
 removed, the remaining positions are closed again (minimum-norm Gauss-Newton,
 :func:`qsa.equilibria.close_positions`) and the integration continues.
 
-*Validity.* The reduction neglects ``O(exp(-lambda d))`` relative corrections
-of the front shape and the slaving of ``L`` (``L - L* = O(exp(-lambda d))``).
-The motion towards a collision is exponentially sensitive: a relative error
-``eps`` in the interaction rate gives a position error
-``~ (eps / lambda) (t / t_c) / (1 - t / t_c)`` that diverges at the collision
-time ``t_c`` (see :func:`collision_sensitivity`).
+*Validity.* The reduction neglects the slaving of the fast modes (the
+perimeter mode, rate ``~ 2 pi beta / R``, is the slowest of them) and the
+deviation of the true slow manifold from the splices. A relative error ``eps``
+of the interaction rate is exponentially amplified near a collision: a pair
+closing as ``d' = -c exp(-lambda d)`` with rate ``c (1 + eps)`` is off by
+
+    (eps / lambda) (t / t_c) / (1 - t / t_c)
+
+at time ``t`` (:func:`collision_sensitivity`), finite for ``t < t_c`` but
+unbounded at the collision itself. Position agreement *up to* the collision
+therefore needs ``eps`` far below 1%; a few per cent of rate error is already a
+several-per-cent collision-time error and, at ``t -> t_c``, an O(facet) position
+error.
+
+Measured (``qsa reproduce fronts``, alpha = 0.1, kstar = 5, beta = 5; the DAE
+collision time converges like ``N^-2`` and was extrapolated from N = 600, 1200,
+2400): triangle (130, 120, 110 degrees) ``t_c`` 2.7726 (ODE) against 2.745
+(DAE, N -> inf), +1.0%; trapezoid with a short facet 0.06546 against 0.06331,
++3.4%. At the DAE's own states the ODE closes the short facet 2-4% slower;
+part of it is the perimeter mode (the difference is 4.3%, 3.3%, 2.5%, 2.5% for
+beta = 0.5, 5, 50, 500), the rest (~2.5%) is not removed by a stiffer perimeter
+and does not depend on alpha at fixed ``lambda d`` (3.34% at alpha = 0.05 with
+the short facet halved, 3.35% at alpha = 0.1): it is not an O(alpha)
+correction. The splice's own ``V^n`` is 100x larger than its tangential part
+(a fast component the flow relaxes in ``~ 1/(2 pi beta / R)``); the Galerkin
+projection is exact at the splice (tested to 1e-7 against
+``Energy.normal_velocity``), so the residual difference is the offset of the
+true slow manifold from the splices.
+Positions agree within 5% of the smallest facet up to 0.95 ``t_c`` (0.6% and
+2.7%) and then diverge as above. The slow eigenvalues agree with the full
+linearization (``qsa.spectra``) within ~1% at polished regular polygons (see
+:func:`qsa.reduction.compare.compare_eigenvalues`).
 """
 
 from __future__ import annotations
@@ -91,7 +117,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import cumulative_simpson, solve_ivp
+from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from qsa.discretize import Fourier
@@ -151,6 +177,12 @@ class FrontODE:
         :meth:`integrate` (kept fixed between collisions).
     points_per_width : float
         Quadrature resolution (nodes per front width ``1/lambda``).
+    beta : float, optional
+        Perimeter penalty ``beta/2 (L - L*)^2``. ``None`` (default): ``L`` is held
+        at ``length`` (the ``beta -> inf`` limit). Otherwise ``L`` is a further
+        unknown (state ``(p, L)``, see "Variable length" in the module docstring).
+    L_star : float, optional
+        Preferred length (default ``length``).
     """
 
     alpha: float
@@ -158,7 +190,9 @@ class FrontODE:
     length: float
     well: object = None
     cutoff: tuple = None
-    points_per_width: float = 4.0
+    points_per_width: float = 3.0
+    beta: float = None
+    L_star: float = None
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)
 
@@ -172,6 +206,10 @@ class FrontODE:
         object.__setattr__(self, "front", front)
         M = _odd(max(self.points_per_width * self.length / front.width, 255))
         object.__setattr__(self, "grid", Fourier(M))
+        if self.beta is not None and not (np.isfinite(self.beta) and self.beta >= 0):
+            raise ValueError(f"beta must be non-negative, got {self.beta!r}")
+        if self.L_star is None:
+            object.__setattr__(self, "L_star", float(self.length))
 
     # ------------------------------------------------------------ geometry
     @property
@@ -200,10 +238,14 @@ class FrontODE:
             raise ValueError("p must increase strictly and span less than the length")
         return p
 
-    def _fields(self, p, cutoff=None):
-        """Everything on the quadrature grid from one evaluation of the fronts."""
-        prof = self.profile(p, cutoff)
-        L, grid, s = self.length, self.grid, self.sigma
+    def _fields(self, p, cutoff=None, L=None):
+        """Everything on the quadrature grid (``sigma = L s``) from one evaluation of the fronts."""
+        L = self.length if L is None else float(L)
+        p = np.asarray(p, dtype=float)
+        cut = cutoff or self.cutoff or default_cutoff(p, L)
+        prof = SpliceProfile(self.front, p, L, cut)
+        grid = self.grid
+        s = L * grid.s
         y = prof.local(s)
         m = prof.a.size
         v0, v1, v2 = prof.cut_front(np.concatenate([y + prof.a, y - prof.a], axis=1))
@@ -215,13 +257,15 @@ class FrontODE:
         cum = L * grid.cumulative(np.column_stack([psi, dpsi]))  # one FFT pair
         theta, Theta = cum[:, 0], cum[:, 1:]
         return {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "theta": theta,
-                "Theta": Theta, "n": np.size(p)}
+                "Theta": Theta, "n": np.size(p), "L": L}
+
+    def _energy(self, f):
+        return float((0.5 * self.alpha**2 * f["d1"] ** 2 + self.front.well.W(f["psi"]))
+                     @ f["w"])
 
     def energy(self, p, cutoff=None):
         """``E(psi_N(p)) = int alpha^2/2 psi'^2 + W(psi) dsigma`` (``L`` fixed)."""
-        f = self._fields(p, cutoff)
-        return float((0.5 * self.alpha**2 * f["d1"] ** 2 + self.front.well.W(f["psi"]))
-                     @ f["w"])
+        return self._energy(self._fields(p, cutoff))
 
     def _gradient(self, f):
         R = -(self.alpha**2) * f["d2"] + self.front.well.dW(f["psi"])
@@ -232,15 +276,25 @@ class FrontODE:
         return self._gradient(self._fields(p, cutoff))
 
     def _normal(self, f):
+        # d gamma / d p_j = -int_0^sigma n Theta_j. Theta_j = (periodic) + c_j s, so with
+        # m = int_0^s n ds' (periodic on a closed curve) and
+        # int_0^s s' n ds' = s m - int_0^s m ds', every cumulative integral is of a
+        # periodic function: spectral (Fourier) accuracy, no end corrections.
         theta, Theta, w = f["theta"], f["Theta"], f["w"]
+        L, grid, s = f["L"], self.grid, self.grid.s
         tau = np.stack([np.cos(theta), np.sin(theta)], axis=1)
         n = np.stack([tau[:, 1], -tau[:, 0]], axis=1)
-        gamma = self.length * self.grid.cumulative(tau)
-        h = self.length / self.grid.N
-        f2 = np.concatenate([n[:, 0:1] * Theta, n[:, 1:2] * Theta], axis=1)
-        dgamma = -cumulative_simpson(np.vstack([f2, f2[:1]]), dx=h, axis=0, initial=0)[:-1]
-        m = Theta.shape[1]
-        phi = n[:, 0:1] * dgamma[:, :m] + n[:, 1:2] * dgamma[:, m:]
+        c = L * f["dpsi"].mean(axis=0)  # Theta_j(L)
+        periodic = Theta - s[:, None] * c
+        k = Theta.shape[1]
+        mom = grid.cumulative(np.column_stack([tau, n]))  # (gamma, m) / L
+        gamma, m = L * mom[:, :2], mom[:, 2:]
+        sn = s[:, None] * m - grid.cumulative(m)  # int_0^s s' n ds'
+        cum = grid.cumulative(np.concatenate([n[:, 0:1] * periodic, n[:, 1:2] * periodic],
+                                             axis=1))
+        dgx = -L * (cum[:, :k] + sn[:, 0:1] * c)
+        dgy = -L * (cum[:, k:] + sn[:, 1:2] * c)
+        phi = n[:, 0:1] * dgx + n[:, 1:2] * dgy
         R = np.column_stack([n[:, 0], n[:, 1], np.sum(gamma * tau, axis=1)])
         coef = np.linalg.solve(R.T @ (w[:, None] * R), R.T @ (w[:, None] * phi))
         return phi - R @ coef
@@ -272,15 +326,47 @@ class FrontODE:
         """``F(p)``: the reduced velocity ``p'`` (shape (2N,)); with the multipliers if asked."""
         return self._velocity(self._check(p), cutoff, multipliers)
 
-    def _velocity(self, p, cutoff=None, multipliers=False):
-        """:meth:`velocity` without the ordering check (trial stages of the integrator)."""
-        f = self._fields(p, cutoff)
+    def velocity_length(self, p, L, cutoff=None):
+        """``(p', L')`` of the variable-length reduction (needs ``beta``), shapes (2N,), ()."""
+        if self.beta is None:
+            raise ValueError("velocity_length needs beta (a variable length)")
+        v = self._velocity(self._check_length(p, L), cutoff, L=float(L))
+        return v[:-1], float(v[-1])
+
+    def _check_length(self, p, L):
+        if not (np.isfinite(L) and L > 0):
+            raise ValueError(f"L must be positive, got {L!r}")
+        p = np.asarray(p, dtype=float)
+        if p.ndim != 1 or p.size < 4 or p.size % 2 or np.any(np.diff(p) <= 0) \
+                or p[-1] - p[0] >= L:
+            raise ValueError("p must hold 2N >= 4 increasing positions spanning less than L")
+        return p
+
+    def _velocity(self, p, cutoff=None, multipliers=False, L=None):
+        """:meth:`velocity` without the ordering check (trial stages of the integrator).
+
+        With ``L`` (variable length, ``beta`` set) the unknowns are ``(p', L')``:
+        inserting length at ``sigma = L`` moves no point of the curve (zero metric),
+        so ``L'`` is tied to ``p'`` by the closure constraints; ``dE/dL`` and
+        ``dC/dL`` at fixed ``p`` are central differences (step ``1e-6 L``).
+        """
+        f = self._fields(p, cutoff, L)
         phi = self._normal(f)
         G = phi.T @ (f["w"][:, None] * phi)
         dE = self._gradient(f)
         _, J = self._constraints(f)
         n = p.size
         A = np.vstack([J, np.ones((1, n)) / np.sqrt(n)])
+        if L is not None:
+            h = 1e-6 * L
+            fp, fm = self._fields(p, cutoff, L + h), self._fields(p, cutoff, L - h)
+            dEL = (self._energy(fp) - self._energy(fm)) / (2 * h) \
+                + self.beta * (L - self.L_star)
+            dCL = (self._constraints(fp)[0] - self._constraints(fm)[0]) / (2 * h)
+            G = np.pad(G, ((0, 1), (0, 1)))
+            dE = np.append(dE, dEL)
+            A = np.column_stack([A, np.append(dCL, 0.0)])
+            n += 1
         K = np.block([[G, A.T], [A, np.zeros((4, 4))]])
         rhs = np.concatenate([-dE, np.zeros(4)])
         try:
@@ -363,6 +449,8 @@ class FrontODE:
             raise ValueError(f"t_final must be positive, got {t_final!r}")
         start = time.perf_counter()
         p = self._check(p0)
+        var = self.beta is not None
+        L = float(self.length)
         ids = np.arange(p.size)  # track index of each current front
         t0, segments, events, nfev = 0.0, [], [], 0
         if t_eval is not None:
@@ -371,31 +459,44 @@ class FrontODE:
         dc = self.collision_distance
         status, message = 0, "reached t_final"
         while True:
-            cut = self.cutoff or default_cutoff(p, self.length)
+            cut = self.cutoff or default_cutoff(p, L)
             if close:
-                p, hist, _ = close_positions(p, self.front, self.length, cut)
-            L = self.length
+                p, hist, _ = close_positions(p, self.front, L, cut)
 
-            def rhs(t, q, cut=cut):
-                return self._velocity(q, cut)
+            def rhs(t, y, cut=cut):
+                q, Lq = (y[:-1], y[-1]) if var else (y, None)
+                try:
+                    v = self._velocity(q, cut, L=Lq)
+                except np.linalg.LinAlgError:
+                    v = None
+                # a wild trial stage (fronts overrun near a collision): NaN makes the
+                # Runge-Kutta error estimate reject the step and shrink it
+                return v if v is not None and np.all(np.isfinite(v)) else np.full(y.size, np.nan)
 
-            def gap_event(t, q, L=L):
-                return np.min(np.diff(np.append(q, q[0] + L))) - dc
+            def gap_event(t, y, L=L):
+                q, Lq = (y[:-1], y[-1]) if var else (y, L)
+                return np.min(np.diff(np.append(q, q[0] + Lq))) - dc
 
             gap_event.terminal = True
             gap_event.direction = -1
             te = None if t_eval is None else t_eval[(t_eval >= t0) & (t_eval <= t_final)]
-            sol = solve_ivp(rhs, (t0, t_final), p, method=method, t_eval=te, rtol=rtol,
+            y0 = np.append(p, L) if var else p
+            sol = solve_ivp(rhs, (t0, t_final), y0, method=method, t_eval=te, rtol=rtol,
                             atol=atol, events=gap_event)
             nfev += sol.nfev
-            Y = np.asarray(sol.y, dtype=float).reshape(p.size, -1).T
-            segments.append(_Segment(np.asarray(sol.t, dtype=float), Y, ids.copy(), cut))
+            Y = np.asarray(sol.y, dtype=float).reshape(y0.size, -1).T
+            Ls = Y[:, -1] if var else np.full(Y.shape[0], L)
+            segments.append(_Segment(np.asarray(sol.t, dtype=float), Y[:, : p.size],
+                                     ids.copy(), cut, Ls))
             if sol.status == -1:
                 status, message = -1, f"solve_ivp failed: {sol.message}"
                 break
             if sol.status == 0:
                 break
-            tc, pc = float(sol.t_events[0][0]), sol.y_events[0][0]
+            tc, yc = float(sol.t_events[0][0]), sol.y_events[0][0]
+            pc = yc[: p.size]
+            if var:
+                L = float(yc[-1])
             gaps = np.diff(np.append(pc, pc[0] + L))
             i = int(np.argmin(gaps))
             j = (i + 1) % pc.size
@@ -422,6 +523,7 @@ class _Segment:
     p: np.ndarray  # (n_t, n_fronts)
     ids: np.ndarray
     cutoff: tuple
+    L: np.ndarray  # (n_t,)
 
 
 @dataclass(frozen=True)

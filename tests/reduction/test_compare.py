@@ -1,0 +1,69 @@
+"""DAE flow against the front ODE; reduced against full slow eigenvalues; the CLI."""
+
+import argparse
+import json
+
+import numpy as np
+import pytest
+
+from qsa.reduction.compare import compare_eigenvalues, compare_fronts
+
+
+def test_slow_eigenvalues_match_full_linearization():
+    # equilateral triangle (polished to an exact equilibrium): a double slow pair
+    r = compare_eigenvalues(3, facet=0.35, N=285)
+    assert r["polish_success"]
+    assert max(abs(np.array(r["rigid"]))) < 0.01 * min(r["full"])  # kernel well separated
+    assert r["max_rel_diff"] < 0.1
+    assert min(r["full"]) > 0  # facets attract: splices are unstable
+
+
+@pytest.mark.slow
+def test_slow_eigenvalues_square():
+    r = compare_eigenvalues(4, facet=0.35, N=285)
+    assert len(r["reduced"]) == 4 and r["max_rel_diff"] < 0.1
+
+
+def test_short_facet_fast_variant():
+    # coarse DAE (N = 400): collision time within 10%, early positions close
+    c = compare_fronts("short-facet", N=400)
+    s = c.summary
+    assert np.isfinite(s["collision_dae"]) and np.isfinite(s["collision_ode"])
+    assert s["collision_rel_diff"] < 0.1
+    assert s["error_at"]["0.5"] < 0.05
+    assert c.dae.shape[1] == 8 and np.all(np.isfinite(c.dae))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scenario", ["triangle", "short-facet"])
+def test_dae_vs_ode_resolved(scenario):
+    s = compare_fronts(scenario, N=1200).summary
+    assert s["collision_rel_diff"] < 0.1
+    # within 5% of the smallest facet up to 0.95 t_c; beyond, the error grows like
+    # eps / (1 - t/t_c) (see qsa.reduction.ode, "Validity")
+    assert s["error_at"]["0.95"] < 0.05
+
+
+def test_reproduce_fronts_cli(tmp_path, capsys):
+    from qsa.commands import reproduce
+
+    parser = argparse.ArgumentParser(prog="qsa")
+    sub = parser.add_subparsers(dest="command")
+    reproduce.add_parser(sub)
+    png = tmp_path / "f.png"
+    args = parser.parse_args(["reproduce", "fronts", "--scenario", "short-facet", "--N", "300",
+                              "--json", "--plot", str(png), "--out", str(tmp_path / "o")])
+    assert args.func(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["scenario"] == "short-facet" and out["N"] == 300
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "o" / "fronts_short-facet.json").exists()
+    args = parser.parse_args(["reproduce", "fronts", "--N", "10"])
+    with pytest.raises(ValueError, match="--N"):
+        args.func(args)
+
+
+def test_no_collision_before_t_final():
+    s = compare_fronts("short-facet", N=300, t_final=0.01).summary
+    assert np.isnan(s["collision_dae"]) and np.isnan(s["collision_ode"])
+    assert np.isfinite(s["max_error"]) and s["max_error"] < 0.05
