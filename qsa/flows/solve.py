@@ -414,7 +414,8 @@ def _load_checkpoint(path, model, options):
     if meta.get("kind") != _KIND:
         raise ValueError(f"resume: {path} is not a flow checkpoint")
     need = ("x_setup", "y_setup", "y", "history_t", "history_y", "pool_c", "pool_y",
-            "pool_ydot", "snap_t", "snap_y", "snap_E", "snap_L", "step_t", "step_E", "step_L")
+            "pool_ydot", "newton_theta", "be_slope", "snap_t", "snap_y", "snap_E", "snap_L",
+            "step_t", "step_E", "step_L")
     missing = [n for n in need if n not in arrays]
     if missing:
         raise ValueError(f"resume: {path} lacks {missing} (corrupt checkpoint)")

@@ -28,7 +28,8 @@ Step-size control (``method="be"``, the paper's): a *pass* takes two steps of
 size ``k`` and, for the error estimate, one step of size ``2k`` from the same
 state; it is accepted when ``max |X_k,k - X_2k|`` over the node positions is at
 most ``tol``, advancing physical time by ``2k``; the next ``k`` is
-``k * min(1.3, 0.8 sqrt(tol / err))``. A failed Newton solve halves the step.
+``k * min(1.3, 0.8 sqrt(tol / err))``. A rejected pass or a failed Newton solve
+halves the step (as the paper's code does).
 
 NOTE: the paper's code advances its clock by ``k`` per accepted pass while the
 state advances by ``2k`` (MATH.md section 7); here the clock is physical time.
@@ -242,6 +243,8 @@ class NewtonSolver:
         self.n_factorizations = 0
         self.n_solves = 0
         self.n_failures = 0
+        #: contraction rate of the last converged solve (tests the first iterate of the next)
+        self.theta = 0.5
 
     # ---------------------------------------------------------- pool
     def _factorize(self, y, ydot, c):
@@ -262,17 +265,16 @@ class NewtonSolver:
 
     def get_state(self):
         """Arrays describing the pool (points where the matrices were factorized)."""
-        if not self.pool:
-            n = self.system.size
-            return {"pool_c": np.zeros(0), "pool_y": np.zeros((0, n)),
-                    "pool_ydot": np.zeros((0, n))}
+        n = self.system.size
         return {"pool_c": np.array([e["c"] for e in self.pool]),
-                "pool_y": np.array([e["y"] for e in self.pool]),
-                "pool_ydot": np.array([e["ydot"] for e in self.pool])}
+                "pool_y": np.array([e["y"] for e in self.pool]).reshape(-1, n),
+                "pool_ydot": np.array([e["ydot"] for e in self.pool]).reshape(-1, n),
+                "newton_theta": np.array(self.theta)}
 
     def set_state(self, state):
         """Rebuild the pool (bitwise the same matrices) from :meth:`get_state` arrays."""
         self.pool = []
+        self.theta = float(state["newton_theta"])
         for c, y, ydot in zip(state["pool_c"], state["pool_y"], state["pool_ydot"],
                                  strict=True):
             lu = factorize(self.system, y, ydot, c, self.strategy, self.perm)
@@ -318,10 +320,15 @@ class NewtonSolver:
             y -= dy
             if norm <= floor:
                 return y, True
+            if not self.reuse:  # full Newton: a new matrix at every iterate
+                entry = self._factorize(y, (y - psi) * c, c)
             if prev is None:
-                if norm <= 0.1 * self.tol:
+                # Hairer-Wanner: the first update is judged by the last known rate
+                rate = min(max(self.theta, 1e-3) ** 0.8, 0.9)
+                if rate / (1.0 - rate) * norm <= self.tol:
                     return y, True
             elif theta / (1.0 - theta) * norm <= self.tol:
+                self.theta = theta
                 return y, True
             prev = norm
 
@@ -366,6 +373,7 @@ class Integrator:
         self.y = np.array(system.y0, dtype=float)
         self.h = float(first_step)  # next proposed step (physical time)
         self.history = []  # BDF2: [(t, y)] of the two previous states, oldest first
+        self.slope = None  # BE: (y_n - y_{n-1/2}) / k of the last accepted pass
         self.n_steps = 0
         self.n_rejected = 0
         self.n_newton_failures = 0
@@ -384,7 +392,9 @@ class Integrator:
         arrays = {"y": self.y,
                   "history_t": np.array([t for t, _ in self.history]),
                   "history_y": np.array([y for _, y in self.history]).reshape(
-                      len(self.history), self.system.size)}
+                      len(self.history), self.system.size),
+                  "be_slope": (np.zeros((0, self.system.size)) if self.slope is None
+                               else self.slope[None, :])}
         arrays.update(self.newton.get_state())
         return scalars, arrays
 
@@ -400,6 +410,8 @@ class Integrator:
         self.y = np.array(arrays["y"], dtype=float)
         self.history = [(float(t), np.array(y)) for t, y in
                         zip(arrays["history_t"], arrays["history_y"], strict=True)]
+        slope = arrays["be_slope"]
+        self.slope = np.array(slope[0]) if slope.shape[0] else None
         self.newton.set_state(arrays)
 
     # ------------------------------------------------------------ steps
@@ -407,7 +419,10 @@ class Integrator:
         """Two backward Euler steps of ``h/2`` and one of ``h``: (y_half, y_new, err) or None."""
         solve, y = self.newton.solve, self.y
         k = 0.5 * h
-        ya, ok = solve(y, 1.0 / k, y)
+        guess = y
+        if self.slope is not None:  # extrapolate the last substep's velocity
+            guess = y + k * self.slope
+        ya, ok = solve(y, 1.0 / k, guess)
         if not ok:
             return None
         yb, ok = solve(ya, 1.0 / k, 2 * ya - y)
@@ -479,6 +494,7 @@ class Integrator:
                     self.history = [(self.t, self.y), (self.t + 0.5 * h, out[0])]
                     self.y = out[1]
                 else:
+                    self.slope = (out[1] - out[0]) / (0.5 * h)
                     self.y = out[1]
                 self.t = t_new
                 self.n_steps += 1
@@ -489,4 +505,5 @@ class Integrator:
                 self.h = h_next
                 return "accepted"
             self.n_rejected += 1
-            self.h = h * max(factor, 0.1)
+            # the paper's code halves a rejected pass; BDF2 uses the usual factor
+            self.h = 0.5 * h if not bdf else h * max(factor, 0.2)

@@ -54,6 +54,7 @@ class SexticWell:
 MODELS = {
     "cha-neighbours": CHA(**PAPER_CHA),
     "cha-dense": CHA(**PAPER_CHA, adhesion_method="dense"),
+    "cha-centred-normal": CHA(**PAPER_CHA, force_normal="centred"),
     "cha-short-kernel": CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=0.35, a=1.0),
     "ch-no-adhesion": CHA(eps=0.1, beta=1.0, rho=1.5),
     "facet": FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0),
