@@ -34,6 +34,15 @@ def test_demo_writes_summary_and_figures(tmp_path, capsys):
     assert summary["curves"]["circle"]["closure"] < 1e-12
     n = summary["npulse"]
     assert n["success"] and n["closure"] < 1e-10 and n["residual"] < 1e-8 * n["residual_scale"]
+    s = summary["spectrum"]
+    assert s["success"] and s["n_kernel"] == s["kernel"]["expected_kernel_dimension"] == 3
+    assert s["kernel"]["lagrange_kernel"] < 1e-6 and s["max_imag"] < 1e-8
+    sp = summary["splice"]
+    assert sp["closure"] < 1e-12 and sp["n_small"] == sp["n_small_expected"] == 5
+    assert sp["separation"] > 100
+    f = summary["flow"]
+    assert f["success"] and f["relative_error"] < 0.02  # DAE decay rate = eigenvalue of J
+    assert f["max_energy_increase"] <= 1e-10 * abs(summary["npulse"]["energy"])
     for fname in summary["figures"]:
         assert (tmp_path / fname).stat().st_size > 10_000
 

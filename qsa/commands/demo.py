@@ -38,5 +38,17 @@ def run(args):
         n = summary["npulse"]
         print(f"3-pulse equilibrium: L = {n['params']['L']:.6g}, L* = {n['params']['L_star']:.6g}, "
               f"max|V^n| = {n['residual']:.1e}, |C(U)| = {n['closure']:.1e}")
+        s = summary["spectrum"]
+        print(f"  spectrum of J: {s['n_unstable']} unstable, kernel dimension {s['n_kernel']} "
+              f"(expected {s['kernel']['expected_kernel_dimension']}), "
+              f"|L_Lambda (d_s kappa, 0)| = {s['kernel']['lagrange_kernel']:.1e}")
+        sp = summary["splice"]
+        print(f"splice (facets {sp['facets']}): |C(U)| = {sp['closure']:.1e}, "
+              f"{sp['n_small']} small eigenvalues (expected {sp['n_small_expected']}), |largest| = "
+              f"{max(abs(v) for v in sp['small_eigenvalues']):.2e}, first fast = "
+              f"{sp['first_fast_eigenvalue']:.4g}")
+        f = summary["flow"]
+        print(f"flow from the perturbed 3-pulse (N={f['N']}): decay rate {f['measured_rate']:.5g} "
+              f"vs eigenvalue {f['eigenvalue']:.5g} (relative error {f['relative_error']:.1e})")
         print(f"figures and summary.json written to {args.out}/")
     return 0

@@ -25,6 +25,15 @@ def _grid(args):
 def add_parser(sub):
     p = sub.add_parser("equilibrium", help="faceted equilibria: N-pulses, splices, circles",
                        description=__doc__.split("\n\n")[0])
+    add_kinds(p, run)
+    return p
+
+
+def add_kinds(p, func, extra=None):
+    """Add the ``npulse|splice|circle`` sub-parsers (with the shared options) to ``p``.
+
+    ``extra(q)``, if given, adds more options to each of them (``qsa spectrum`` uses it).
+    """
     kinds = p.add_subparsers(dest="kind", metavar="KIND", required=True)
 
     def common(q):
@@ -35,13 +44,15 @@ def add_parser(sub):
                        help="grid nodes (default: a Fourier grid resolving the fronts)")
         q.add_argument("--fd", action="store_true", help="finite differences instead of Fourier")
         q.add_argument("--json", action="store_true", help="JSON summary on stdout")
-        q.add_argument("--plot", metavar="FILE", help="write the curve and kappa(s) to FILE")
+        q.add_argument("--plot", metavar="FILE", help="write a figure to FILE")
         q.add_argument("--polish", action="store_true",
                        help="polish the state by Newton on V^n = 0 with closure (exact "
                             "discrete equilibrium of the reported energy)")
         q.add_argument("--tol", type=float, default=1e-10,
                        help="relative residual target of --polish (default 1e-10)")
-        q.set_defaults(func=run)
+        if extra is not None:
+            extra(q)
+        q.set_defaults(func=func)
 
     q = kinds.add_parser("npulse", help="N-fold symmetric faceted equilibrium")
     q.add_argument("--pulses", type=int, required=True, help="number of corners N >= 2")
@@ -55,7 +66,7 @@ def add_parser(sub):
     q = kinds.add_parser("circle", help="the circle as an equilibrium (L* balanced)")
     q.add_argument("--radius", type=float, required=True)
     common(q)
-    return p
+    return kinds
 
 
 def build(args):
@@ -74,7 +85,9 @@ def build(args):
                              kstar=args.kstar)
 
 
-def run(args):
+def build_polished(args):
+    """:func:`build`, then :func:`~qsa.equilibria.polish` if ``args.polish`` (keeping the
+    construction parameters that polish does not report)."""
     eq = build(args)
     if getattr(args, "polish", False):
         from dataclasses import replace
@@ -86,6 +99,11 @@ def run(args):
         kept = {k: v for k, v in constructed.params.items()
                 if k not in eq.params and isinstance(v, (int, float))}
         eq = replace(eq, params={**eq.params, **kept})
+    return eq
+
+
+def run(args):
+    eq = build_polished(args)
     summary = eq.summary()
     if args.plot:
         from qsa import plotting

@@ -15,7 +15,14 @@ from qsa.equilibria.newton import PolishResult, multipliers, polish, residual_sc
 from qsa.equilibria.npulse import circle, npulse, resolving_size
 from qsa.equilibria.orbit import PeriodicOrbit, periodic_orbit, periodic_range
 from qsa.equilibria.result import Equilibrium
-from qsa.equilibria.splice import SpliceProfile, splice, splice_polygon
+from qsa.equilibria.splice import (
+    SpliceProfile,
+    close_positions,
+    default_cutoff,
+    splice,
+    splice_closure,
+    splice_polygon,
+)
 
 __all__ = [
     "Branch",
@@ -38,4 +45,7 @@ __all__ = [
     "splice",
     "splice_polygon",
     "SpliceProfile",
+    "close_positions",
+    "default_cutoff",
+    "splice_closure",
 ]

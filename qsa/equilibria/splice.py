@@ -41,7 +41,8 @@ from qsa.equilibria._wells import _positive, is_quartic, resolve_well
 from qsa.equilibria.heteroclinic import heteroclinic
 from qsa.equilibria.result import Equilibrium
 
-__all__ = ["splice", "splice_polygon", "SpliceProfile", "polygon_positions"]
+__all__ = ["splice", "splice_polygon", "SpliceProfile", "polygon_positions", "splice_closure",
+           "close_positions", "default_cutoff"]
 
 
 # ------------------------------------------------------------------ cutoff
@@ -227,9 +228,8 @@ def _check_positions(positions, L, cutoff, front):
     if np.any(np.diff(p) <= 0) or p[-1] - p[0] >= L:
         raise ValueError("positions must increase strictly and span less than the length L")
     a_max = 0.5 * np.max(p[1::2] - p[0::2])
-    if cutoff is None:
-        l2 = 0.75 * (0.5 * L - a_max)  # margin: the closure solve may lengthen corners
-        cutoff = (0.5 * l2, l2)
+    if cutoff is None:  # margin: the closure solve may lengthen corners
+        cutoff = default_cutoff(p, L)
     l1, l2 = (float(v) for v in cutoff)
     if not 0 < l1 < l2:
         raise ValueError(f"cutoff=(l1, l2) needs 0 < l1 < l2, got {cutoff!r}")
@@ -239,6 +239,83 @@ def _check_positions(positions, L, cutoff, front):
             f"exceed L/2={0.5 * L:.4g}"
         )
     return p, (l1, l2)
+
+
+def default_cutoff(positions, length):
+    """The default fixed cutoff ``(l1, l2)`` of :func:`splice` for these positions.
+
+    ``l2 = 0.75 (L/2 - max a_i)`` (``a_i`` the corner half-lengths), ``l1 = l2 / 2``.
+    """
+    p = np.asarray(positions, dtype=float)
+    l2 = 0.75 * (0.5 * float(length) - 0.5 * np.max(p[1::2] - p[0::2]))
+    return (0.5 * l2, l2)
+
+
+def splice_closure(profile, grid=None, jacobian=True):
+    """Closure defect ``C(p)`` of a splice and its derivative in the positions.
+
+    Parameters
+    ----------
+    profile : SpliceProfile
+    grid : Fourier, optional
+        Quadrature grid on ``[0, 1)`` (``sigma = L s``); default a grid with about
+        eight points per front width.
+    jacobian : bool
+
+    Returns
+    -------
+    C : ndarray, shape (3,)
+        ``(int cos theta dsigma, int sin theta dsigma, int psi_N dsigma - 2 pi)``
+        (e:C1, e:C2), ``theta(0) = 0``.
+    J : ndarray, shape (3, 2N) or None
+        ``dC/dp``.
+    """
+    fine = _fine_grid(profile.front, profile.L) if grid is None else grid
+    return _closure_and_jacobian(profile, fine, want_jac=jacobian)
+
+
+def close_positions(positions, front, length, cutoff, tol=1e-12, max_iter=30):
+    """Minimum-norm Gauss-Newton steps on the positions until ``|C(p)| <= tol``.
+
+    Parameters
+    ----------
+    positions : array_like, shape (2N,)
+    front : Heteroclinic
+    length : float
+    cutoff : (float, float)
+    tol : float
+    max_iter : int
+
+    Returns
+    -------
+    positions : ndarray, shape (2N,)
+    history : list of float
+        ``|C|`` before each step and after the last.
+    J : ndarray, shape (3, 2N)
+        ``dC/dp`` at the returned positions.
+
+    Raises
+    ------
+    ValueError
+        Bad positions or cutoff, or a solve that makes fronts cross.
+    """
+    L = _positive(length, "length")
+    p, cut = _check_positions(positions, L, cutoff, front)
+    fine = _fine_grid(front, L)
+    C, J = _closure_and_jacobian(SpliceProfile(front, p, L, cut), fine)
+    history = [float(np.linalg.norm(C))]
+    it = 0
+    while history[-1] > tol and it < max_iter:
+        p = p + np.linalg.lstsq(J, -C, rcond=None)[0]
+        it += 1
+        if np.any(np.diff(p) <= 0):
+            raise ValueError(
+                "the splice cannot close: the closure solve makes fronts cross (corners or "
+                "facets of non-positive length); start from positions nearer a closed polygon"
+            )
+        C, J = _closure_and_jacobian(SpliceProfile(front, p, L, cut), fine)
+        history.append(float(np.linalg.norm(C)))
+    return p, history, J
 
 
 def _null_directions(J, n):
@@ -297,22 +374,8 @@ def splice(positions, alpha, well=None, grid=None, length=None, kstar=None, beta
     well, kstar = resolve_well(well, kstar)
     front = heteroclinic(alpha, well, kstar)
     p, cut = _check_positions(positions, L, cutoff, front)
-    fine = _fine_grid(front, L)
-    history = []
-    C, J = _closure_and_jacobian(SpliceProfile(front, p, L, cut), fine)
-    history.append(float(np.linalg.norm(C)))
-    it = 0
-    while solve and history[-1] > tol and it < max_iter:
-        step = np.linalg.lstsq(J, -C, rcond=None)[0]
-        p = p + step
-        it += 1
-        if np.any(np.diff(p) <= 0):
-            raise ValueError(
-                "the splice cannot close: the closure solve makes fronts cross (corners or "
-                "facets of non-positive length); start from positions nearer a closed polygon"
-            )
-        C, J = _closure_and_jacobian(SpliceProfile(front, p, L, cut), fine)
-        history.append(float(np.linalg.norm(C)))
+    p, history, J = close_positions(p, front, L, cut, tol, max_iter if solve else 0)
+    it = len(history) - 1
     p, cut = _check_positions(p, L, cut, front)
     prof = SpliceProfile(front, p, L, cut)
 

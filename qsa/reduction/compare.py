@@ -1,0 +1,258 @@
+"""Validation of the front-position ODE against the DAE faceting flow.
+
+:func:`compare_fronts` starts the DAE faceting flow (:class:`qsa.flows.FacetingFlow`,
+``L* = L`` so the perimeter term is balanced) from a splice with unequal facets,
+tracks its fronts (:func:`qsa.reduction.track_fronts`), integrates the
+front-position ODE (:class:`qsa.reduction.FrontODE`) from the same ``p(0)`` and
+compares
+
+* the front positions (``kstar/2`` crossings of both profiles, each set
+  shifted to zero mean: the DAE's base node drifts with its tangential gauge,
+  the ODE fixes ``sum p' = 0``), in units of the smallest facet;
+* the first collision (pair annihilation) times.
+
+Because a closing pair obeys ``d' ~ -c exp(-lambda d)``, a relative rate error
+``eps`` makes the position error grow like ``(eps/lambda) x / (1 - x)``,
+``x = t / t_c`` (:func:`qsa.reduction.ode.collision_sensitivity`): it is
+finite at every ``t < t_c`` but unbounded at the collision itself, so the error
+is also reported at fixed fractions of ``t_c`` and with the ODE time rescaled
+by the ratio of the collision times (``t -> t t_c^ODE / t_c^DAE``), which
+removes the rate error and measures the shape of the trajectory.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from qsa.reduction.fronts import detect_fronts, track_fronts
+from qsa.reduction.ode import FrontODE
+
+__all__ = ["SCENARIOS", "Scenario", "FrontComparison", "scenario_splice", "compare_fronts",
+           "compare_eigenvalues"]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A rounded polygon (corner angles in degrees, requested facet lengths)."""
+
+    name: str
+    angles: tuple
+    facets: tuple
+    description: str
+    t_final: float
+
+
+#: Built-in scenarios of ``qsa reproduce fronts`` (alpha = 0.1, kstar = 5, beta = 5).
+SCENARIOS = {
+    "triangle": Scenario(
+        "triangle", (130.0, 120.0, 110.0), (0.3, 0.4, 0.5),
+        "triangle with unequal sides relaxing: the shortest facet collapses", 3.2),
+    "short-facet": Scenario(
+        "short-facet", (90.0, 90.0, 80.0, 100.0), (0.5, 0.28, 0.5, 0.35),
+        "quadrilateral (right trapezoid) with one short facet that collapses", 0.09),
+}
+
+
+def scenario_splice(scenario, alpha=0.1, kstar=5.0, grid=None):
+    """The closed splice of a scenario (:func:`qsa.equilibria.splice_polygon`)."""
+    from qsa.equilibria import splice_polygon
+
+    sc = SCENARIOS[scenario] if isinstance(scenario, str) else scenario
+    return splice_polygon(np.deg2rad(sc.angles), sc.facets, alpha, kstar=kstar, grid=grid)
+
+
+@dataclass(frozen=True)
+class FrontComparison:
+    """Result of :func:`compare_fronts` (times, positions and the summary numbers).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        DAE snapshot times up to its first collision.
+    dae, ode : ndarray, shape (n, 2N)
+        Front positions (``kstar/2`` crossings, zero mean) of both models at ``t``;
+        ODE rows after its own collision are NaN.
+    t_ode : ndarray
+        ODE output times (dense, for plotting), ``p_ode`` its positions (zero mean).
+    collision_dae, collision_ode : float
+        First collision times (NaN if none before ``t_final``).
+    facet_min : float
+        Smallest facet length at ``t = 0``.
+    error : ndarray, shape (n,)
+        ``max_i |p_ode - p_dae| / facet_min`` at ``t``.
+    summary : dict
+        JSON-ready numbers (see :func:`compare_fronts`).
+    """
+
+    t: np.ndarray
+    dae: np.ndarray
+    ode: np.ndarray
+    t_ode: np.ndarray
+    p_ode: np.ndarray
+    collision_dae: float
+    collision_ode: float
+    facet_min: float
+    error: np.ndarray
+    summary: dict = field(default_factory=dict)
+
+
+def _centred(P, L):
+    """Positions unwrapped against the first row and shifted to zero mean per row."""
+    P = np.array(P, dtype=float)
+    P = P[0] + ((P - P[0] + 0.5 * L) % L - 0.5 * L)
+    return P - P.mean(axis=1, keepdims=True)
+
+
+def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, t_final=None,
+                   tol=1e-6, method="bdf2", rtol=1e-6, fractions=(0.5, 0.9, 0.95, 0.99)):
+    """Run the DAE flow and the front ODE from the same splice and compare them.
+
+    Parameters
+    ----------
+    scenario : str or Scenario
+        ``"triangle"`` or ``"short-facet"`` (:data:`SCENARIOS`).
+    alpha, kstar, beta : float
+    N : int
+        DAE nodes (second-order finite differences: the collision time converges
+        like ``N^-2``).
+    t_final : float, optional
+        Default the scenario's.
+    tol, method
+        DAE local error tolerance and method (:func:`qsa.flows.solve_flow`).
+    rtol : float
+        ODE tolerance.
+    fractions : tuple of float
+        Fractions of the DAE collision time at which the error is reported.
+
+    Returns
+    -------
+    FrontComparison
+        ``summary`` keys: ``collision_dae``, ``collision_ode``,
+        ``collision_rel_diff``, ``max_error`` (largest error before the first
+        collision of either model, at DAE snapshots, / smallest facet),
+        ``error_at`` (``{fraction: error}``), ``max_error_rescaled`` (ODE time
+        rescaled by ``t_c^ODE / t_c^DAE``), ``time_dae``, ``time_ode``,
+        ``speedup``, ``n_steps_dae``, ``nfev_ode``, ``N``, ``facet_min``.
+    """
+    from qsa import FiniteDifference
+    from qsa.flows import FacetingFlow, solve_flow
+
+    sc = SCENARIOS[scenario] if isinstance(scenario, str) else scenario
+    t_final = sc.t_final if t_final is None else float(t_final)
+    eq = scenario_splice(sc, alpha, kstar, grid=FiniteDifference(N))
+    p0 = np.array(eq.params["positions"])
+    L = eq.params["L"]
+    n_fronts = p0.size
+    gaps0 = np.diff(np.append(p0, p0[0] + L))
+    facet_min = float(gaps0[1::2].min())
+
+    def stop(t, y, system):
+        return detect_fronts(system.curvature(y), kstar, system.length(y)).n < n_fronts
+
+    x, y = eq.curve.positions()
+    start = time.process_time()
+    res = solve_flow(FacetingFlow(alpha, kstar, beta, L), (x, y), t_final, N=N, tol=tol,
+                     method=method, callback=stop, progress=False)
+    time_dae = time.process_time() - start
+    S = res.system
+    kap = [S.curvature(s) for s in res.states]
+    lengths = [S.length(s) for s in res.states]
+    tracks = track_fronts(res.t, kap, kstar, lengths)
+    tc_dae = tracks.first_collision.time if tracks.events else np.nan
+    alive = np.all(np.isfinite(tracks.positions), axis=1)
+
+    ode = FrontODE(alpha, kstar, L)
+    start = time.process_time()
+    sol = ode.integrate(p0, t_final, rtol=rtol, max_collisions=0)
+    time_ode = time.process_time() - start
+    tc_ode = sol.first_collision.time if sol.events else np.nan
+    seg = sol.segments[0]
+
+    t = res.t[alive]
+    dae = _centred(tracks.positions[alive], L)
+    m = t <= (tc_ode if np.isfinite(tc_ode) else np.inf)
+    sol_t = ode.integrate(p0, t_final, t_eval=t[m], rtol=rtol, max_collisions=0)
+    P = np.full(dae.shape, np.nan)
+    cross = np.array([ode.crossings(q) for q in sol_t.segments[0].p])
+    if cross.size:
+        Q = sol_t.segments[0].p
+        cross = Q + ((cross - Q + 0.5 * L) % L - 0.5 * L)
+        P[: cross.shape[0]] = cross - cross.mean(axis=1, keepdims=True)
+    error = np.max(np.abs(P - dae), axis=1) / facet_min
+    tc = np.nanmin([tc_dae, tc_ode])
+    before = (t < tc) & np.isfinite(error)
+    error_at = {}
+    for f in fractions:
+        sel = before & (t <= f * tc_dae)
+        error_at[str(f)] = float(np.max(error[sel])) if np.any(sel) else np.nan
+    rescaled = np.nan
+    if np.isfinite(tc_dae) and np.isfinite(tc_ode):
+        ts = t[t < tc_dae] * (tc_ode / tc_dae)
+        sol_s = ode.integrate(p0, t_final, t_eval=ts[ts < tc_ode], rtol=rtol, max_collisions=0)
+        Qs = sol_s.segments[0].p
+        cs = np.array([ode.crossings(q) for q in Qs])
+        if cs.ndim == 2 and cs.shape[1] == n_fronts:
+            cs = Qs + ((cs - Qs + 0.5 * L) % L - 0.5 * L)
+            cs -= cs.mean(axis=1, keepdims=True)
+            rescaled = float(np.max(np.abs(cs - dae[: cs.shape[0]])) / facet_min)
+    summary = {
+        "scenario": sc.name, "description": sc.description, "alpha": alpha, "kstar": kstar,
+        "beta": beta, "N": int(N), "L": float(L), "facet_min": facet_min,
+        "collision_dae": float(tc_dae), "collision_ode": float(tc_ode),
+        "collision_rel_diff": float(abs(tc_ode - tc_dae) / tc_dae),
+        "max_error": float(np.max(error[before])) if np.any(before) else np.nan,
+        "error_at": error_at, "max_error_rescaled": rescaled,
+        "time_dae": time_dae, "time_ode": time_ode, "speedup": time_dae / time_ode,
+        "n_steps_dae": int(res.n_steps), "nfev_ode": int(sol.nfev),
+        "dae_message": res.message, "ode_message": sol.message,
+    }
+    p_ode = seg.p - seg.p.mean(axis=1, keepdims=True)
+    return FrontComparison(t, dae, P, seg.t, p_ode, float(tc_dae), float(tc_ode), facet_min,
+                           error, summary)
+
+
+def compare_eigenvalues(n_corners=3, facet=0.35, alpha=0.1, kstar=5.0, N=285,
+                        angles=None, facets=None):
+    """Slow eigenvalues of the reduced Jacobian against the full linearization.
+
+    The full linearization (``qsa.spectra.spectrum``, ``gauge="normal"``, the
+    operator ``J = -[M^dagger L_Lambda M(., 0)]_1``) is only a linearization at an
+    equilibrium, so the splice (by default a regular polygon with equal facets,
+    an equilibrium by symmetry up to exponentially small terms) is polished
+    first (:func:`qsa.equilibria.polish`); the reduced Jacobian
+    (:meth:`FrontODE.eigenvalues`) is taken at the splice positions. Of the full
+    spectrum the ``2N - 1`` eigenvalues nearest 0 are the three rigid motions
+    (discretely ``~ eps |J|``) and the ``2N - 4`` slow front modes.
+
+    Returns
+    -------
+    dict
+        ``reduced``, ``full`` (matched, sorted descending), ``rigid``,
+        ``max_rel_diff``, ``polish_residual``, ``N``.
+    """
+    import warnings
+
+    from qsa import Fourier
+    from qsa.equilibria import polish, splice_polygon
+    from qsa.spectra import spectrum
+
+    ang = np.full(n_corners, 2 * np.pi / n_corners) if angles is None else np.deg2rad(angles)
+    fac = np.full(n_corners, facet) if facets is None else np.asarray(facets, dtype=float)
+    eq = splice_polygon(ang, fac, alpha, kstar=kstar, grid=Fourier(N))
+    p = np.array(eq.params["positions"])
+    red = FrontODE(alpha, kstar, eq.params["L"]).eigenvalues(p)
+    pol = polish(eq.energy, eq.curve)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        spec = spectrum(pol.energy, pol.curve, gauge="normal")
+    ev = np.real(np.asarray(spec.eigenvalues))
+    near = ev[np.argsort(np.abs(ev))][: red.size + 3]  # sorted by |lambda|
+    rigid, slow = near[:3], np.sort(near[3:])[::-1]
+    red = np.sort(np.real(red))[::-1]
+    rel = np.abs(red - slow) / np.abs(slow)
+    return {"reduced": red.tolist(), "full": slow.tolist(), "rigid": rigid.tolist(),
+            "max_rel_diff": float(rel.max()), "polish_residual": float(pol.residual),
+            "polish_success": bool(pol.success), "N": int(N), "n_corners": int(n_corners)}

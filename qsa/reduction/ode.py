@@ -1,0 +1,500 @@
+r"""The front-position ODE: quasi-steady faceting dynamics on the splice manifold.
+
+Between coarsening events a faceting flow (e:Facet-NV) stays close to the
+manifold of heteroclinic splices ``psi_N(p)`` (e:psi_N; built by
+:class:`qsa.equilibria.SpliceProfile`) and only the front positions
+``p = (p_1 < ... < p_2N)`` move, exponentially slowly. This module reduces the
+flow to ``p' = F(p)``.
+
+Derivation of the reduced dynamics
+----------------------------------
+*The flow and its metric.* In intrinsic coordinates ``U = (kappa, g)`` the
+faceting flow is ``U_t = -M M^dagger grad_I E + M(0, v)`` (e:FoE_IG), where
+``M(0, v)`` is a reparameterization (the tangential gauge; the DAE of
+:mod:`qsa.flows.dae` picks ``v`` so that ``g`` stays uniform). On
+``range M`` the flow is the gradient flow of ``E`` for the metric
+``<U1, (M M^dagger)^+ U1>``: with ``U1 = M w``, ``w = (phi, v)`` the extrinsic
+(normal, tangential) velocity and ``M = A S B^T`` a singular value
+decomposition, ``(M M^dagger)^+ M w = A S^{-1} B^T w`` and
+
+    <M w, (M M^dagger)^+ M w> = |B^T w|^2 = min_{r in ker M} |w - r|^2_{L2(dsigma)},
+
+the ``L^2(dsigma)`` norm of the velocity modulo rigid motions (``ker M``,
+MATH.md section 2). Reparameterizations cost nothing in the flow (the energy is
+invariant and the gauge is free), so the metric the flow induces on shapes is
+the quotient by ``v``: minimising over ``v`` removes the tangential part and
+the tangential components of the rigid motions, leaving
+
+    |U1|^2 = min_{c in R^3} int (phi - c . r^n)^2 dsigma,
+    r^n = (e1 . n, e2 . n, gamma . tau),
+
+the normal velocity modulo rigid normal velocities. This is the metric of
+``V^n = -[M^dagger grad_I E]_1`` itself: ``dE/dt = -int (V^n)^2 dsigma``.
+
+*Pull-back.* On the splice manifold (``g = L`` uniform, ``L = L*`` so the
+perimeter penalty is balanced) the curve is
+``gamma(sigma) = int_0^sigma tau(theta) dsigma'`` with
+``theta(sigma) = int_0^sigma psi_N``. A change of ``p_j`` changes the angle by
+``Theta_j(sigma) = int_0^sigma d psi_N / d p_j`` and, since
+``d tau / d theta = -n``, the position by
+``d gamma / d p_j = -int_0^sigma n Theta_j dsigma'``. Its normal velocity is
+
+    phi_j = n . d gamma / d p_j,   phi_j^perp = phi_j - (projection on span r^n),
+
+and the pulled-back metric is the Gram matrix
+
+    G_ij = int phi_i^perp phi_j^perp dsigma       (2N x 2N, positive semi-definite).
+
+A common shift of all ``p_j`` only moves the base point (a rigid motion of the
+shape): ``G 1 = 0``.
+
+*Energy and constraints.* With ``L`` fixed,
+``E(p) = int alpha^2/2 psi_N'^2 + W(psi_N) dsigma`` and, integrating by parts,
+
+    dE/dp_j = int R_kappa d psi_N / d p_j dsigma,
+    R_kappa = -alpha^2 psi_N'' + W'(psi_N),
+
+an exponentially small interaction force (``~ exp(-kstar d / (sqrt 2 alpha))``,
+``d`` the spacing of neighbouring fronts). The closure constraints ``C(p) = 0``
+(e:C1 two components, e:C2 the total turning; see
+:func:`qsa.equilibria.splice_closure`) restrict ``p`` to a manifold of
+dimension ``2N - 3``; the base point is fixed by ``sum p_j' = 0``.
+
+*Reduced flow.* The constrained gradient flow of ``E(p)`` in the metric ``G``
+(equivalently the Galerkin projection of ``V^n`` on the tangent space,
+``min |V^n - sum p_j' phi_j^perp|``) is the saddle-point system
+
+    [ G   A^T ] [ p' ]   [ -dE/dp ]
+    [ A   0   ] [ mu ] = [    0   ],    A = [ dC/dp ; 1^T / sqrt(2N) ],
+
+``mu`` the multipliers (the first three are ``Lambda``-like). ``F(p) = p'``
+decreases ``E`` at the rate ``p'^T G p'``. The front positions here are the
+splice parameters ``p_j``; on the profile they are the ``kstar / 2`` crossings
+up to the neighbours' tails (:meth:`FrontODE.crossings` gives the crossings).
+
+*Collisions.* When two neighbouring fronts come within ``d_c`` -- the spacing
+at which the superposed pair no longer crosses ``kstar / 2`` (``2 ln 3 /
+lambda`` for the quartic well) -- the splice manifold ends: the pair is
+removed, the remaining positions are closed again (minimum-norm Gauss-Newton,
+:func:`qsa.equilibria.close_positions`) and the integration continues.
+
+*Validity.* The reduction neglects ``O(exp(-lambda d))`` relative corrections
+of the front shape and the slaving of ``L`` (``L - L* = O(exp(-lambda d))``).
+The motion towards a collision is exponentially sensitive: a relative error
+``eps`` in the interaction rate gives a position error
+``~ (eps / lambda) (t / t_c) / (1 - t / t_c)`` that diverges at the collision
+time ``t_c`` (see :func:`collision_sensitivity`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import cumulative_simpson, solve_ivp
+from scipy.optimize import brentq
+
+from qsa.discretize import Fourier
+from qsa.equilibria import heteroclinic
+from qsa.equilibria._wells import resolve_well
+from qsa.equilibria.splice import (
+    SpliceProfile,
+    close_positions,
+    default_cutoff,
+)
+
+__all__ = ["FrontODE", "FrontODEResult", "collision_distance", "collision_sensitivity"]
+
+
+def collision_distance(front):
+    """Spacing ``d_c`` at which a superposed pair of opposite fronts stops crossing ``kstar/2``.
+
+    Solves ``psi_h(d/2) - psi_h(-d/2) = kstar / 2`` (the profile at the midpoint
+    of the pair); ``2 ln 3 / lambda`` for the quartic well.
+    """
+    k = front.kstar
+    return brentq(lambda d: front(0.5 * d) - front(-0.5 * d) - 0.5 * k, 1e-12 * front.width,
+                  50 * front.width, xtol=1e-14 * front.width)
+
+
+def collision_sensitivity(eps, t, t_c, lam):
+    """Position error ``(eps / lam) (t/t_c) / (1 - t/t_c)`` from a relative rate error ``eps``.
+
+    For a pair closing as ``d' = -c exp(-lam d)`` (``t_c`` its collision time), a
+    model with rate ``c (1 + eps)`` is off by this much at time ``t`` (first order
+    in ``eps``).
+    """
+    x = np.asarray(t, dtype=float) / t_c
+    return eps / lam * x / (1 - x)
+
+
+def _odd(n):
+    n = int(n)
+    return n + 1 - n % 2
+
+
+@dataclass(frozen=True)
+class FrontODE:
+    """The front-position ODE ``p' = F(p)`` of the faceting flow (see module docstring).
+
+    Parameters
+    ----------
+    alpha, kstar : float
+        Faceting parameters (``alpha > 0``).
+    length : float
+        Curve length ``L`` (``= L*``; fixed).
+    well : object, optional
+        Double well (default the quartic).
+    cutoff : (float, float), optional
+        Fixed cutoff of the fronts (:class:`SpliceProfile`); default
+        :func:`qsa.equilibria.default_cutoff` of the positions passed to
+        :meth:`integrate` (kept fixed between collisions).
+    points_per_width : float
+        Quadrature resolution (nodes per front width ``1/lambda``).
+    """
+
+    alpha: float
+    kstar: float
+    length: float
+    well: object = None
+    cutoff: tuple = None
+    points_per_width: float = 4.0
+    front: object = field(init=False, repr=False)
+    grid: object = field(init=False, repr=False)
+
+    def __post_init__(self):
+        for name in ("alpha", "kstar", "length", "points_per_width"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be positive, got {v!r}")
+        well, kstar = resolve_well(self.well, self.kstar)
+        front = heteroclinic(self.alpha, well, kstar)
+        object.__setattr__(self, "front", front)
+        M = _odd(max(self.points_per_width * self.length / front.width, 255))
+        object.__setattr__(self, "grid", Fourier(M))
+
+    # ------------------------------------------------------------ geometry
+    @property
+    def sigma(self):
+        """Quadrature nodes in arc length, shape (M,)."""
+        return self.length * self.grid.s
+
+    @property
+    def collision_distance(self):
+        """:func:`collision_distance` of the front."""
+        return collision_distance(self.front)
+
+    def profile(self, p, cutoff=None):
+        """The :class:`SpliceProfile` at positions ``p``."""
+        p = np.asarray(p, dtype=float)
+        cut = cutoff or self.cutoff or default_cutoff(p, self.length)
+        return SpliceProfile(self.front, p, self.length, cut)
+
+    def _check(self, p):
+        p = np.asarray(p, dtype=float)
+        if p.ndim != 1 or p.size < 4 or p.size % 2:
+            raise ValueError(f"p must hold 2N >= 4 positions, got shape {p.shape}")
+        if not np.all(np.isfinite(p)):
+            raise ValueError("p contains NaN or inf")
+        if np.any(np.diff(p) <= 0) or p[-1] - p[0] >= self.length:
+            raise ValueError("p must increase strictly and span less than the length")
+        return p
+
+    def _fields(self, p, cutoff=None):
+        """Everything on the quadrature grid from one evaluation of the fronts."""
+        prof = self.profile(p, cutoff)
+        L, grid, s = self.length, self.grid, self.sigma
+        y = prof.local(s)
+        m = prof.a.size
+        v0, v1, v2 = prof.cut_front(np.concatenate([y + prof.a, y - prof.a], axis=1))
+        psi, d1, d2 = (np.sum(v[:, :m] - v[:, m:], axis=1) for v in (v0, v1, v2))
+        dpsi = np.empty((s.size, 2 * m))
+        dpsi[:, 0::2] = -v1[:, :m]
+        dpsi[:, 1::2] = v1[:, m:]
+        w = L * grid.weights
+        cum = L * grid.cumulative(np.column_stack([psi, dpsi]))  # one FFT pair
+        theta, Theta = cum[:, 0], cum[:, 1:]
+        return {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "theta": theta,
+                "Theta": Theta, "n": np.size(p)}
+
+    def energy(self, p, cutoff=None):
+        """``E(psi_N(p)) = int alpha^2/2 psi'^2 + W(psi) dsigma`` (``L`` fixed)."""
+        f = self._fields(p, cutoff)
+        return float((0.5 * self.alpha**2 * f["d1"] ** 2 + self.front.well.W(f["psi"]))
+                     @ f["w"])
+
+    def _gradient(self, f):
+        R = -(self.alpha**2) * f["d2"] + self.front.well.dW(f["psi"])
+        return (R * f["w"]) @ f["dpsi"]
+
+    def gradient(self, p, cutoff=None):
+        """``dE/dp_j = int R_kappa d psi_N/d p_j dsigma``, shape (2N,)."""
+        return self._gradient(self._fields(p, cutoff))
+
+    def _normal(self, f):
+        theta, Theta, w = f["theta"], f["Theta"], f["w"]
+        tau = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+        n = np.stack([tau[:, 1], -tau[:, 0]], axis=1)
+        gamma = self.length * self.grid.cumulative(tau)
+        h = self.length / self.grid.N
+        f2 = np.concatenate([n[:, 0:1] * Theta, n[:, 1:2] * Theta], axis=1)
+        dgamma = -cumulative_simpson(np.vstack([f2, f2[:1]]), dx=h, axis=0, initial=0)[:-1]
+        m = Theta.shape[1]
+        phi = n[:, 0:1] * dgamma[:, :m] + n[:, 1:2] * dgamma[:, m:]
+        R = np.column_stack([n[:, 0], n[:, 1], np.sum(gamma * tau, axis=1)])
+        coef = np.linalg.solve(R.T @ (w[:, None] * R), R.T @ (w[:, None] * phi))
+        return phi - R @ coef
+
+    def normal_velocities(self, p, cutoff=None):
+        """``phi_j^perp``: normal velocity per unit ``p_j'`` modulo rigid motions, (M, 2N).
+
+        Also returns the quadrature weights ``dsigma`` (shape (M,)).
+        """
+        f = self._fields(p, cutoff)
+        return self._normal(f), f["w"]
+
+    def metric(self, p, cutoff=None):
+        """The pulled-back metric ``G_ij = int phi_i^perp phi_j^perp dsigma``, (2N, 2N)."""
+        phi, w = self.normal_velocities(p, cutoff)
+        return phi.T @ (w[:, None] * phi)
+
+    @staticmethod
+    def _constraints(f):
+        c, s, w = np.cos(f["theta"]), np.sin(f["theta"]), f["w"]
+        C = np.array([c @ w, s @ w, f["psi"] @ w - 2 * np.pi])
+        return C, np.vstack([-(s * w) @ f["Theta"], (c * w) @ f["Theta"], w @ f["dpsi"]])
+
+    def constraints(self, p, cutoff=None):
+        """``C(p)`` (shape (3,), as :func:`qsa.equilibria.splice_closure`) and ``dC/dp`` (3, 2N)."""
+        return self._constraints(self._fields(p, cutoff))
+
+    def velocity(self, p, cutoff=None, multipliers=False):
+        """``F(p)``: the reduced velocity ``p'`` (shape (2N,)); with the multipliers if asked."""
+        return self._velocity(self._check(p), cutoff, multipliers)
+
+    def _velocity(self, p, cutoff=None, multipliers=False):
+        """:meth:`velocity` without the ordering check (trial stages of the integrator)."""
+        f = self._fields(p, cutoff)
+        phi = self._normal(f)
+        G = phi.T @ (f["w"][:, None] * phi)
+        dE = self._gradient(f)
+        _, J = self._constraints(f)
+        n = p.size
+        A = np.vstack([J, np.ones((1, n)) / np.sqrt(n)])
+        K = np.block([[G, A.T], [A, np.zeros((4, 4))]])
+        rhs = np.concatenate([-dE, np.zeros(4)])
+        try:
+            sol = np.linalg.solve(K, rhs)
+        except np.linalg.LinAlgError:  # degenerate constraints (e.g. a symmetric lens)
+            sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
+        return (sol[:n], sol[n:]) if multipliers else sol[:n]
+
+    # ------------------------------------------------------------ linearization
+    def tangent_basis(self, p, cutoff=None):
+        """Orthonormal basis of ``{dC/dp . q = 0, sum q = 0}``, shape (2N, 2N - 4)."""
+        p = self._check(p)
+        _, J = self.constraints(p, cutoff)
+        A = np.vstack([J, np.ones((1, p.size))])
+        _, _, Vt = np.linalg.svd(A)
+        return Vt[4:].T
+
+    def jacobian(self, p, cutoff=None, step=None):
+        """``dF/dp`` by central differences, shape (2N, 2N), and the tangent-space block.
+
+        Returns
+        -------
+        J : ndarray, shape (2N, 2N)
+        J_T : ndarray, shape (2N - 4, 2N - 4)
+            ``T^T J T`` with ``T`` = :meth:`tangent_basis`: the linearization of the
+            reduced flow on the splice manifold; its eigenvalues are the slow
+            eigenvalues of the faceting flow at the splice.
+        """
+        p = self._check(p)
+        cut = cutoff or self.cutoff or default_cutoff(p, self.length)
+        h = 1e-3 * self.front.width if step is None else float(step)
+        n = p.size
+        J = np.empty((n, n))
+        for j in range(n):
+            e = np.zeros(n)
+            e[j] = h
+            J[:, j] = (self.velocity(p + e, cut) - self.velocity(p - e, cut)) / (2 * h)
+        T = self.tangent_basis(p, cut)
+        return J, T.T @ J @ T
+
+    def eigenvalues(self, p, cutoff=None):
+        """Eigenvalues of the tangent-space Jacobian (sorted by real part, descending)."""
+        ev = np.linalg.eigvals(self.jacobian(p, cutoff)[1])
+        return ev[np.argsort(-ev.real)]
+
+    def crossings(self, p, cutoff=None):
+        """Crossings of ``kstar/2`` by the splice profile (the detector's front positions)."""
+        from qsa.reduction.fronts import detect_fronts
+
+        prof = self.profile(p, cutoff)
+        f = detect_fronts(prof(self.sigma), self.front.kstar, self.length)
+        return f.positions
+
+    # ------------------------------------------------------------ integration
+    def integrate(self, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method="RK45",
+                  max_collisions=10, close=True):
+        """Integrate ``p' = F(p)`` from ``p0``, removing colliding pairs.
+
+        Parameters
+        ----------
+        p0 : array_like, shape (2N,)
+            Initial positions (closed to ``1e-12`` first when ``close``).
+        t_final : float
+        t_eval : array_like, optional
+            Output times (default: the solver's steps).
+        rtol, atol, method
+            Passed to :func:`scipy.integrate.solve_ivp` (``atol`` default
+            ``1e-9 * width``).
+        max_collisions : int
+        close : bool
+            Project ``p0`` and the positions after each collision onto ``C = 0``.
+
+        Returns
+        -------
+        FrontODEResult
+        """
+        import time
+
+        if not (np.isfinite(t_final) and t_final > 0):
+            raise ValueError(f"t_final must be positive, got {t_final!r}")
+        start = time.perf_counter()
+        p = self._check(p0)
+        ids = np.arange(p.size)  # track index of each current front
+        t0, segments, events, nfev = 0.0, [], [], 0
+        if t_eval is not None:
+            t_eval = np.asarray(t_eval, dtype=float)
+        atol = 1e-9 * self.front.width if atol is None else atol
+        dc = self.collision_distance
+        status, message = 0, "reached t_final"
+        while True:
+            cut = self.cutoff or default_cutoff(p, self.length)
+            if close:
+                p, hist, _ = close_positions(p, self.front, self.length, cut)
+            L = self.length
+
+            def rhs(t, q, cut=cut):
+                return self._velocity(q, cut)
+
+            def gap_event(t, q, L=L):
+                return np.min(np.diff(np.append(q, q[0] + L))) - dc
+
+            gap_event.terminal = True
+            gap_event.direction = -1
+            te = None if t_eval is None else t_eval[(t_eval >= t0) & (t_eval <= t_final)]
+            sol = solve_ivp(rhs, (t0, t_final), p, method=method, t_eval=te, rtol=rtol,
+                            atol=atol, events=gap_event)
+            nfev += sol.nfev
+            Y = np.asarray(sol.y, dtype=float).reshape(p.size, -1).T
+            segments.append(_Segment(np.asarray(sol.t, dtype=float), Y, ids.copy(), cut))
+            if sol.status == -1:
+                status, message = -1, f"solve_ivp failed: {sol.message}"
+                break
+            if sol.status == 0:
+                break
+            tc, pc = float(sol.t_events[0][0]), sol.y_events[0][0]
+            gaps = np.diff(np.append(pc, pc[0] + L))
+            i = int(np.argmin(gaps))
+            j = (i + 1) % pc.size
+            events.append(ODECollision(tc, (int(ids[i]), int(ids[j])), float(gaps[i]),
+                                       pc.copy(), ids.copy()))
+            keep = np.ones(pc.size, dtype=bool)
+            keep[[i, j]] = False
+            q, qids = pc[keep], ids[keep]
+            if j == 0:  # the pair straddled s = 0: the first kept front is a down-front
+                q = np.append(q[1:], q[0] + L)
+                qids = np.append(qids[1:], qids[0])
+            if q.size < 4 or len(events) > max_collisions:
+                status, message = 1, (f"stopped after collision at t={tc:.6g}: "
+                                      f"{q.size} fronts left")
+                break
+            p, ids, t0 = q, qids, tc
+        return FrontODEResult(segments, events, status == 0 or status == 1, status, message,
+                              nfev, time.perf_counter() - start)
+
+
+@dataclass(frozen=True)
+class _Segment:
+    t: np.ndarray
+    p: np.ndarray  # (n_t, n_fronts)
+    ids: np.ndarray
+    cutoff: tuple
+
+
+@dataclass(frozen=True)
+class ODECollision:
+    """A pair removed by :meth:`FrontODE.integrate`.
+
+    Attributes
+    ----------
+    time : float
+    fronts : (int, int)
+        Track indices (positions in the initial ``p0``) of the pair.
+    gap : float
+        Their spacing at removal (``= d_c``).
+    positions : ndarray
+        All positions at the collision.
+    ids : ndarray
+        Track indices of ``positions``.
+    """
+
+    time: float
+    fronts: tuple
+    gap: float
+    positions: np.ndarray
+    ids: np.ndarray
+
+
+@dataclass(frozen=True)
+class FrontODEResult:
+    """Result of :meth:`FrontODE.integrate`.
+
+    Attributes
+    ----------
+    segments : list
+        Pieces between collisions (``t``, ``p``, ``ids``, ``cutoff``).
+    events : list of ODECollision
+    success : bool
+    status : int
+        0 reached ``t_final``; 1 stopped after a collision left < 4 fronts; -1 failed.
+    message : str
+    nfev : int
+    elapsed : float
+        Wall time in seconds.
+    """
+
+    segments: list
+    events: list
+    success: bool
+    status: int
+    message: str
+    nfev: int
+    elapsed: float
+
+    @property
+    def t(self):
+        """All output times, shape (n_t,)."""
+        return np.concatenate([s.t for s in self.segments])
+
+    @property
+    def n_fronts(self):
+        """Number of initial fronts."""
+        return self.segments[0].p.shape[1]
+
+    @property
+    def positions(self):
+        """Positions by initial track index, NaN after removal, shape (n_t, 2N)."""
+        rows = []
+        for s in self.segments:
+            P = np.full((s.t.size, self.n_fronts), np.nan)
+            P[:, s.ids] = s.p
+            rows.append(P)
+        return np.vstack(rows)
+
+    @property
+    def first_collision(self):
+        """The first :class:`ODECollision`, or None."""
+        return self.events[0] if self.events else None

@@ -1,0 +1,208 @@
+"""Energy Hessian and the Lagrangian Hessian ``L_Lambda = nabla^2 E - Lambda . nabla^2 C``.
+
+Constrained critical points satisfy ``nabla_I E = Lambda . Psi`` (e:Abs-CP) with
+``Psi_j = nabla_I C_j`` spanning ``ker M-dagger``. The second variation of ``E`` on
+the closed manifold ``C(U) = 0`` is the quadratic form of
+
+    L_Lambda = nabla_I^2 E - sum_j Lambda_j nabla_I^2 C_j,
+
+not of ``nabla_I^2 E`` alone (e:cF-Hessian is the energy part; the constraint
+Hessians e:cC-Hessian, e:cC-Hessian3 are taken from :mod:`qsa.geometry`, which
+implements their corrected form).
+
+# NOTE: the paper linearizes with ``nabla^2 E`` (e:FOE-Lin); MATH.md section 4 shows
+# that this is only right when ``Lambda = 0`` and that the correct operator is
+# ``L_Lambda``. Both are available here and in :mod:`qsa.spectra.linearization`.
+
+``Lambda`` is the least-squares projection of ``nabla_I E`` on ``span Psi`` in
+``<f, h> = int f h dsigma`` (:func:`qsa.equilibria.multipliers`); the projection
+residual ``|nabla_I E - Lambda . Psi|`` measures how far the curve is from a
+constrained critical point and is reported with every Hessian.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from qsa.curve import Curve
+from qsa.energies.base import Energy, add_matrices
+from qsa.equilibria.newton import multipliers, normal_velocity, residual_scale
+from qsa.geometry import constraint_gradients, constraint_hessians
+
+__all__ = ["hessian", "lagrange_hessian", "LagrangeHessian", "inner_norm", "check_input",
+           "DENSE_CONSTRAINT_LIMIT"]
+
+#: Largest N for which the dense constraint Hessians of ``C_1, C_2`` (O(N^2) memory)
+#: are assembled on sparse (finite-difference) grids; above it they are omitted
+#: when their multipliers are negligible (see :func:`lagrange_hessian`).
+DENSE_CONSTRAINT_LIMIT = 1200
+
+
+def check_input(energy, curve):
+    """Raise ``ValueError`` naming the argument unless ``energy``/``curve`` are usable."""
+    if not isinstance(energy, Energy):
+        raise ValueError(f"energy must be a qsa Energy (e.g. Faceting(...) + Perimeter(...)), "
+                         f"got {type(energy).__name__}")
+    if not isinstance(curve, Curve):
+        raise ValueError(f"curve must be a qsa Curve, got {type(curve).__name__}")
+
+
+def inner_norm(curve: Curve, f) -> float:
+    """``sqrt(<f, f>)`` for a nodal (N,) or stacked (2N,) vector, ``<.,.> = int . dsigma``."""
+    f = np.asarray(f, dtype=float)
+    w = curve.dsigma
+    if f.shape[0] == 2 * curve.N:
+        w = np.concatenate([w, w])
+    return float(np.sqrt(np.sum(w * f * f)))
+
+
+def hessian(energy, curve: Curve):
+    """``nabla_I^2 E`` with respect to ``<f, h> = int f h dsigma`` (e:cF-Hessian).
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+
+    Returns
+    -------
+    matrix, shape (2N, 2N)
+        ``energy.hessian(curve)``: dense for Fourier grids, sparse or
+        :class:`~qsa.linalg.SparsePlusLowRank` (perimeter penalty) for finite
+        differences. dsigma-self-adjoint.
+    """
+    check_input(energy, curve)
+    return energy.hessian(curve)
+
+
+@dataclass(frozen=True, eq=False)
+class LagrangeHessian:
+    """The Lagrangian Hessian at a curve and how close the curve is to equilibrium.
+
+    Attributes
+    ----------
+    matrix : matrix, shape (2N, 2N)
+        ``L_Lambda = nabla_I^2 E - Lambda . nabla_I^2 C`` (dsigma-self-adjoint); same
+        matrix type as the energy Hessian, except that the dense ``C_1, C_2`` Hessians
+        make it dense when they are included.
+    energy_hessian : matrix, shape (2N, 2N)
+        ``nabla_I^2 E``.
+    multipliers : ndarray, shape (3,)
+        ``Lambda``, the projection coefficients of ``nabla_I E`` on ``Psi``.
+    projection_residual : float
+        ``|nabla_I E - Lambda . Psi|`` in the ``<.,.>`` norm: zero exactly at a
+        constrained critical point.
+    relative_projection_residual : float
+        ``projection_residual / max(|nabla_I E|, |Lambda . Psi|)`` (0 if both vanish).
+    residual : float
+        ``max |V^n|`` (the normal velocity; zero at an equilibrium).
+    relative_residual : float
+        ``residual`` divided by the largest single term of ``V^n``
+        (:func:`qsa.equilibria.residual_scale`): the scale-free distance from equilibrium.
+    constraints_included : tuple of bool, shape (3,)
+        Which ``Lambda_j nabla^2 C_j`` terms are in ``matrix``.
+    message : str
+    """
+
+    matrix: object
+    energy_hessian: object
+    multipliers: np.ndarray
+    projection_residual: float
+    relative_projection_residual: float
+    residual: float
+    relative_residual: float
+    constraints_included: tuple
+    message: str = ""
+
+
+def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessian:
+    """The Lagrangian Hessian ``L_Lambda = nabla_I^2 E - sum_j Lambda_j nabla_I^2 C_j``.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+    constraints : {"auto", "all", "curvature"}
+        Which constraint Hessians to subtract. ``"all"``: all three (``C_1, C_2`` are
+        dense, O(N^2) memory). ``"curvature"``: only ``Lambda_3 nabla^2 C_3`` (sparse).
+        ``"auto"`` (default): ``C_3`` always; ``C_1, C_2`` only when significant,
+        ``|Lambda_j Psi_j| > max(|nabla_I E - Lambda . Psi|, 1e-8 |nabla_I E|)`` (else
+        the term is below the accuracy of the projection itself; for the local
+        energies here ``Lambda_{1,2} = 0`` at equilibria, MATH.md section 4). If they
+        are significant on a sparse grid with ``N >`` :data:`DENSE_CONSTRAINT_LIMIT`,
+        a ``ValueError`` is raised (use ``"all"``).
+
+    Returns
+    -------
+    LagrangeHessian
+        The matrix (``<.,.>``-self-adjoint), ``Lambda``, and the projection and
+        equilibrium residuals.
+
+    Notes
+    -----
+    ``Lambda`` is the ``<.,.>``-least-squares solution of ``nabla_I E = Lambda . Psi``
+    (MATH.md section 4); e:Abs-CP, e:cF-Hessian, e:cC-Hessian, e:cC-Hessian3.
+
+    Examples
+    --------
+    >>> from qsa import Fourier
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(0.7, 0.1, grid=Fourier(33))
+    >>> LH = lagrange_hessian(eq.energy, eq.curve)
+    >>> bool(abs(LH.multipliers[2] - eq.multipliers[2]) < 1e-10), LH.relative_residual < 1e-12
+    (True, True)
+    """
+    check_input(energy, curve)
+    if constraints not in ("auto", "all", "curvature"):
+        raise ValueError(f"constraints must be 'auto', 'all' or 'curvature', got {constraints!r}")
+    H = energy.hessian(curve)
+    grad = energy.gradient(curve)
+    Lam = multipliers(energy, curve, gradient=grad)
+    Psi = constraint_gradients(curve)
+    proj = Lam @ Psi
+    res_abs = inner_norm(curve, grad - proj)
+    denom = max(inner_norm(curve, grad), inner_norm(curve, proj))
+    res_rel = res_abs / denom if denom > 0 else 0.0
+    Vn = normal_velocity(energy, curve)
+    vres = float(np.max(np.abs(Vn)))
+    vrel = vres / residual_scale(energy, curve)
+
+    dense_ok = (not curve.grid.sparse) or curve.N <= DENSE_CONSTRAINT_LIMIT
+    floor = max(res_abs, 1e-8 * inner_norm(curve, grad))
+    significant = any(abs(Lam[j]) * inner_norm(curve, Psi[j]) > floor for j in range(2))
+    use12 = constraints == "all" or (constraints == "auto" and significant)
+    if constraints == "auto" and significant and not dense_ok:
+        raise ValueError(
+            f"curve: Lambda_1,2 = {Lam[:2]} are not negligible, so L_Lambda needs the dense "
+            f"constraint Hessians of C_1, C_2 (N = {curve.N} > {DENSE_CONSTRAINT_LIMIT}); "
+            "pass constraints='all' to assemble them anyway")
+    Hc = constraint_hessians(curve) if use12 else [None, None, _hc3(curve)]
+    L = H
+    for j in (2, 0, 1) if use12 else (2,):
+        if Lam[j] != 0.0:
+            L = add_matrices(L, -Lam[j] * Hc[j])
+    included = (use12, use12, True)
+    msg = (f"Lambda = {np.array2string(Lam, precision=6)}; projection residual "
+           f"{res_abs:.2e} ({res_rel:.1e} relative); max|V^n| = {vres:.2e} "
+           f"({vrel:.1e} of the largest term)")
+    if not use12:
+        msg += (f"; Lambda_1,2 terms omitted (|Lambda_1,2| = {np.abs(Lam[:2]).max():.1e}, "
+                "below the projection's accuracy)")
+    return LagrangeHessian(L, H, Lam, res_abs, res_rel, vres, vrel, included, msg)
+
+
+def _hc3(curve: Curve):
+    """``nabla^2 C_3 = [[0, 1/g], [1/g, 0]]`` in the grid's matrix type."""
+    import scipy.sparse as sp
+
+    N = curve.N
+    if curve.grid.sparse:
+        d = sp.diags(1.0 / curve.g)
+        return sp.bmat([[None, d], [d, None]], format="csr")
+    out = np.zeros((2 * N, 2 * N))
+    idx = np.arange(N)
+    out[idx, N + idx] = 1.0 / curve.g
+    out[N + idx, idx] = 1.0 / curve.g
+    return out

@@ -1,0 +1,210 @@
+"""Linearizations of the gradient flow ``U_t = -M M-dagger nabla_I E`` at an equilibrium.
+
+Four gauges (MATH.md section 4; e:FOE-Lin, e:Meq, e:CVE):
+
+``"comoving"``
+    ``calL = -M M-dagger L_Lambda`` on ``(kappa1, g1)``, shape (2N, 2N), with the
+    Lagrangian Hessian ``L_Lambda`` of :mod:`qsa.spectra.hessian`. Structure:
+    ``calL M(phi, v) = M(J phi, 0)``, so its non-zero eigenvalues are those of ``J``
+    and its kernel has dimension ``N + dim ker J`` (reparameterization modes
+    ``M(0, v)`` plus the directions outside ``range M``).
+``"paper"``
+    ``-M M-dagger nabla^2 E`` as printed (e:FOE-Lin), for comparison only.
+    # NOTE: it omits the multiplier term ``Lambda . nabla^2 C`` and has spurious
+    # positive eigenvalues when ``Lambda != 0`` (MATH.md section 4).
+``"normal"``
+    ``J = -[M-dagger L_Lambda M(., 0)]_1``, shape (N, N): the linearization of the
+    normal velocity under normal perturbations ``phi``. dsigma-self-adjoint, so its
+    spectrum is real; its kernel contains the normal components of the rigid motions.
+``"scaled"``
+    The scaled-arc-length quotient on ``x = (kappa1, g1)`` with ``g1`` spatially
+    constant, shape (N + 1, N + 1): ``calL`` followed by the projection along the
+    reparameterization modes ``M(0, v)`` (mean-zero ``v``) that keeps ``g``
+    constant. Needs a curve with constant ``g``.
+
+Discrete form: with ``W = diag(dsigma)``, ``W2 = diag(dsigma, dsigma)`` and
+``M1 = M[:, :N]`` (the normal columns of ``M``),
+``J = -W^{-1} M1^T (W2 L_Lambda) M1``; ``W2 L_Lambda`` is symmetric, so ``W J`` is
+symmetric and ``W^{1/2} J W^{-1/2}`` (:func:`normal_operator` with
+``symmetric=True``) is the symmetric standard form used by the eigen-solvers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from qsa import geometry
+from qsa.curve import Curve
+from qsa.linalg import SparsePlusLowRank
+from qsa.spectra.hessian import LagrangeHessian, check_input, lagrange_hessian
+
+__all__ = ["linearization", "normal_operator", "scaled_operator", "symmetric_form", "GAUGES"]
+
+#: The gauges accepted by :func:`linearization` and :func:`qsa.spectra.spectrum`.
+GAUGES = ("comoving", "paper", "normal", "scaled")
+
+
+def _check_gauge(gauge):
+    if gauge not in GAUGES:
+        raise ValueError(f"gauge must be one of {GAUGES}, got {gauge!r}")
+    return gauge
+
+
+def _scale_rows_cols(A, left, right):
+    """``diag(left) A diag(right)`` for dense, sparse or sparse-plus-low-rank ``A``."""
+    if isinstance(A, SparsePlusLowRank):
+        S = sp.diags(left) @ A.S @ sp.diags(right)
+        return SparsePlusLowRank(S, left[:, None] * A.U, right[:, None] * A.V)
+    if sp.issparse(A):
+        return (sp.diags(left) @ A @ sp.diags(right)).tocsr()
+    return left[:, None] * np.asarray(A) * right[None, :]
+
+
+def _symmetrize(A):
+    if isinstance(A, SparsePlusLowRank):
+        S = 0.5 * (A.S + A.S.T)
+        U = np.hstack([A.U, A.V]) * np.sqrt(0.5)
+        V = np.hstack([A.V, A.U]) * np.sqrt(0.5)
+        return SparsePlusLowRank(S, U, V)
+    if sp.issparse(A):
+        return (0.5 * (A + A.T)).tocsr()
+    return 0.5 * (A + A.T)
+
+
+def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None):
+    """``J = -[M-dagger L_Lambda M(., 0)]_1``, or its symmetric form ``W^{1/2} J W^{-1/2}``.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+    symmetric : bool
+        Return ``S = W^{1/2} J W^{-1/2}`` (``W = diag(dsigma)``), symmetric in the
+        Euclidean inner product (exactly symmetrised, ``(S + S^T)/2``): same
+        eigenvalues as ``J``, eigenvectors ``y = W^{1/2} phi``.
+    lagrange : LagrangeHessian, optional
+        A precomputed :func:`~qsa.spectra.lagrange_hessian` of this curve.
+
+    Returns
+    -------
+    matrix, shape (N, N)
+        Dense for Fourier grids; sparse or :class:`~qsa.linalg.SparsePlusLowRank`
+        for finite differences. ``J`` is self-adjoint in ``<f, h> = int f h dsigma``.
+    """
+    check_input(energy, curve)
+    LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
+    J = _normal_core(curve, LH.matrix)
+    return symmetric_form(curve, J) if symmetric else J
+
+
+def _normal_core(curve, L):
+    N = curve.N
+    w = curve.dsigma
+    w2 = np.concatenate([w, w])
+    M1 = geometry.M(curve)[:, :N]
+    # W2 L is symmetric (L is dsigma-self-adjoint); J = -W^{-1} M1^T (W2 L) M1
+    WL = _scale_rows_cols(L, w2, np.ones(2 * N))
+    core = np.asarray(M1.T @ (WL @ M1)) if not curve.grid.sparse else M1.T @ (WL @ M1)
+    return _scale_rows_cols(core, -1.0 / w, np.ones(N))
+
+
+def symmetric_form(curve: Curve, J):
+    """``(S + S^T) / 2`` with ``S = W^{1/2} J W^{-1/2}``, ``W = diag(dsigma)``, shape (N, N)."""
+    rw = np.sqrt(curve.dsigma)
+    return _symmetrize(_scale_rows_cols(J, rw, 1.0 / rw))
+
+
+def scaled_operator(energy, curve: Curve, lagrange=None) -> np.ndarray:
+    """The scaled-arc-length linearization on ``x = (kappa1, g1)``, shape (N + 1, N + 1).
+
+    ``g1`` is the (spatially constant) perturbation of ``g = L``. With
+    ``dV = -[M-dagger L_Lambda (kappa1, g1 1)]_1`` and ``y = M(dV, 0)``, the
+    tangential velocity ``v`` (mean zero) restoring constant ``g`` solves
+    ``d_s v = y_g - c``, ``c = int y_g ds``, and ``K x = (y_kappa - v nabla_s kappa, c)``.
+    Dense (the pseudo-inverse of ``d/ds`` is dense).
+
+    Raises
+    ------
+    ValueError
+        If ``curve.g`` is not constant (reparameterize first, e.g. with
+        :func:`qsa.equilibria.polish`).
+    """
+    check_input(energy, curve)
+    g = curve.g
+    if np.max(np.abs(g - g.mean())) > 1e-10 * g.mean():
+        raise ValueError("curve: the scaled gauge needs constant g (scaled arc length); "
+                         "reparameterize the curve first (e.g. qsa.equilibria.polish)")
+    LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
+    N = curve.N
+    grid = curve.grid
+    L = _dense(LH.matrix)
+    Md1 = _dense(geometry.M_adjoint(curve))[:N]
+    M1 = _dense(geometry.M(curve))[:, :N]
+    E = np.zeros((2 * N, N + 1))
+    E[:N, :N] = np.eye(N)
+    E[N:, N] = 1.0
+    dV = -(Md1 @ (L @ E))
+    y = M1 @ dV
+    yk, yg = y[:N], y[N:]
+    c = grid.weights @ yg
+    Dpinv = np.linalg.pinv(_dense(grid.derivative()))
+    v = Dpinv @ (yg - c[None, :])
+    K = np.empty((N + 1, N + 1))
+    K[:N] = yk - curve.grad_s(curve.kappa)[:, None] * v
+    K[N] = c
+    return K
+
+
+def _dense(A):
+    if isinstance(A, SparsePlusLowRank) or sp.issparse(A):
+        return A.toarray()
+    return np.asarray(A)
+
+
+def linearization(energy, curve: Curve, gauge="comoving", lagrange=None):
+    """The linearized flow at ``curve`` in the requested gauge (see the module docstring).
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+        An equilibrium (or quasi-equilibrium); far from one the operators are
+        still returned, but only ``"comoving"`` then linearizes the flow.
+    gauge : {"comoving", "paper", "normal", "scaled"}
+        ``"comoving"``: ``-M M-dagger L_Lambda`` (2N x 2N, the default);
+        ``"paper"``: ``-M M-dagger nabla^2 E`` (e:FOE-Lin as printed);
+        ``"normal"``: ``J`` (N x N, dsigma-self-adjoint);
+        ``"scaled"``: the constant-``g`` quotient (N + 1 x N + 1, dense).
+    lagrange : LagrangeHessian, optional
+        Reuse a computed :func:`~qsa.spectra.lagrange_hessian`.
+
+    Returns
+    -------
+    matrix
+        Dense ``ndarray`` for Fourier grids (and for ``"scaled"``); ``scipy.sparse``
+        or :class:`~qsa.linalg.SparsePlusLowRank` for finite differences.
+
+    Examples
+    --------
+    >>> from qsa import Fourier
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(0.7, 0.1, grid=Fourier(33))
+    >>> J = linearization(eq.energy, eq.curve, gauge="normal")
+    >>> J.shape
+    (33, 33)
+    """
+    check_input(energy, curve)
+    _check_gauge(gauge)
+    if lagrange is not None and not isinstance(lagrange, LagrangeHessian):
+        raise ValueError("lagrange must be a LagrangeHessian from qsa.spectra.lagrange_hessian")
+    if gauge == "normal":
+        return normal_operator(energy, curve, lagrange=lagrange)
+    if gauge == "scaled":
+        return scaled_operator(energy, curve, lagrange=lagrange)
+    if gauge == "paper":
+        H = energy.hessian(curve)
+    else:
+        H = (lagrange if lagrange is not None else lagrange_hessian(energy, curve)).matrix
+    out = geometry.MMdagger(curve) @ H
+    return -out

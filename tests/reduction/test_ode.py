@@ -1,0 +1,160 @@
+"""The front-position ODE: derivatives, metric, constraints, velocity, collisions."""
+
+import numpy as np
+import pytest
+
+from qsa.equilibria import splice_closure, splice_polygon
+from qsa.reduction.ode import FrontODE, collision_distance, collision_sensitivity
+
+ALPHA, KSTAR = 0.1, 5.0
+
+
+@pytest.fixture(scope="module")
+def triangle():
+    eq = splice_polygon(np.deg2rad([130, 120, 110]), [0.3, 0.4, 0.5], ALPHA, kstar=KSTAR)
+    p = np.array(eq.params["positions"])
+    ode = FrontODE(ALPHA, KSTAR, eq.params["L"])
+    return ode, p, tuple(eq.params["cutoff"])
+
+
+def test_gradient_matches_energy_differences(triangle):
+    ode, p, cut = triangle
+    g = ode.gradient(p, cut)
+    h = 2e-5
+    fd = np.array([(ode.energy(p + h * e, cut) - ode.energy(p - h * e, cut)) / (2 * h)
+                   for e in np.eye(p.size)])
+    assert np.max(np.abs(g - fd)) < 1e-5 * np.max(np.abs(g))
+    assert np.max(np.abs(g)) > 1e-5  # unequal facets: a real interaction force
+
+
+def curve_positions(ode, p, cut):
+    """gamma(sigma) of the splice (gamma(0) = 0, theta(0) = 0) by a different quadrature."""
+    from scipy.integrate import cumulative_trapezoid
+
+    s = np.linspace(0, ode.length, 40001)
+    psi = ode.profile(p, cut)(s)
+    theta = cumulative_trapezoid(psi, s, initial=0)
+    x = cumulative_trapezoid(np.cos(theta), s, initial=0)
+    y = cumulative_trapezoid(np.sin(theta), s, initial=0)
+    return s, np.stack([x, y], 1), theta
+
+
+def test_normal_velocities_match_position_differences(triangle):
+    # along directions tangent to the closure constraints the perturbed curves stay
+    # closed (to O(h^2)) and the normal displacement is periodic
+    ode, p, cut = triangle
+    phi, w = ode.normal_velocities(p, cut)
+    s, gam, theta = curve_positions(ode, p, cut)
+    n = np.stack([np.sin(theta), -np.cos(theta)], 1)
+    tau = np.stack([np.cos(theta), np.sin(theta)], 1)
+    R = np.column_stack([n[:, 0], n[:, 1], np.sum(gam * tau, 1)])
+    wt = np.full(s.size, s[1] - s[0])
+    wt[[0, -1]] *= 0.5
+    h = 1e-5
+    T = ode.tangent_basis(p, cut)
+    for q in T.T:
+        dg = (curve_positions(ode, p + h * q, cut)[1]
+              - curve_positions(ode, p - h * q, cut)[1]) / (2 * h)
+        f = np.sum(n * dg, 1)
+        c = np.linalg.solve(R.T @ (wt[:, None] * R), R.T @ (wt * f))
+        ref = np.interp(ode.sigma, s, f - R @ c)
+        assert np.max(np.abs(phi @ q - ref)) < 1e-5 * np.max(np.abs(ref))
+    G = ode.metric(p, cut)
+    assert np.allclose(G, G.T)
+    ev = np.linalg.eigvalsh(G)
+    assert abs(ev[0]) < 1e-6 * ev[-1] and ev[1] > 1e-4 * ev[-1]  # only the shift is free
+    assert np.linalg.norm(G @ np.ones(p.size)) < 1e-6 * ev[-1]
+
+
+def test_constraints_match_splice_closure_and_differences(triangle):
+    ode, p, cut = triangle
+    C, J = ode.constraints(p, cut)
+    C2, J2 = splice_closure(ode.profile(p, cut), ode.grid)
+    assert np.allclose(C, C2, atol=1e-14) and np.allclose(J, J2, atol=1e-13)
+    assert np.linalg.norm(C) < 1e-10
+    h = 1e-6
+    fd = np.column_stack([(ode.constraints(p + h * e, cut)[0]
+                           - ode.constraints(p - h * e, cut)[0]) / (2 * h)
+                          for e in np.eye(p.size)])
+    assert np.max(np.abs(J - fd)) < 1e-7
+
+
+def test_velocity_is_tangent_and_dissipative(triangle):
+    ode, p, cut = triangle
+    F, mu = ode.velocity(p, cut, multipliers=True)
+    _, J = ode.constraints(p, cut)
+    assert np.max(np.abs(J @ F)) < 1e-12 * np.max(np.abs(J)) * np.max(np.abs(F))
+    assert abs(F.sum()) < 1e-12
+    G = ode.metric(p, cut)
+    dEdt = ode.gradient(p, cut) @ F
+    assert dEdt < 0 and np.isclose(dEdt, -F @ G @ F, rtol=1e-8)
+    # Galerkin: any other admissible velocity fits V^n no better (dE/dt is extremal)
+    T = ode.tangent_basis(p, cut)
+    q = F + T @ np.array([1e-3, -2e-3])
+    assert 0.5 * q @ G @ q + ode.gradient(p, cut) @ q > 0.5 * F @ G @ F + dEdt
+
+
+def test_regular_polygon_is_stationary_and_symmetric():
+    eq = splice_polygon(np.full(3, 2 * np.pi / 3), np.full(3, 0.35), ALPHA, kstar=KSTAR)
+    p = np.array(eq.params["positions"])
+    ode = FrontODE(ALPHA, KSTAR, eq.params["L"])
+    assert np.max(np.abs(ode.velocity(p))) < 1e-10
+    ev = ode.eigenvalues(p)
+    assert ev.size == 2 and np.allclose(ev.imag, 0)
+    assert ev[0].real > 0 and np.isclose(ev[0].real, ev[1].real, rtol=1e-5)  # E-symmetric pair
+
+
+def test_collision_distance_quartic():
+    from qsa.equilibria import heteroclinic
+
+    front = heteroclinic(ALPHA, kstar=KSTAR)
+    assert np.isclose(collision_distance(front), 2 * np.log(3) / front.decay_rate, rtol=1e-10)
+
+
+def test_collision_sensitivity_exact_for_pair_law():
+    lam, c, d0 = 30.0, 1e-3, 0.3
+    tc = (np.exp(lam * d0) - 1) / (lam * c)
+    eps, t = 1e-4, 0.6 * tc
+
+    def d(t, c):
+        return np.log(np.exp(lam * d0) - lam * c * t) / lam
+
+    assert np.isclose(d(t, c) - d(t, c * (1 + eps)), collision_sensitivity(eps, t, tc, lam),
+                      rtol=1e-2)
+
+
+def test_integrate_removes_pair_and_recloses():
+    eq = splice_polygon(np.deg2rad([90, 90, 80, 100]), [0.5, 0.28, 0.5, 0.35], ALPHA,
+                        kstar=KSTAR)
+    p = np.array(eq.params["positions"])
+    ode = FrontODE(ALPHA, KSTAR, eq.params["L"])
+    r = ode.integrate(p, 0.08, rtol=1e-6, max_collisions=1)
+    assert r.success and len(r.events) >= 1
+    ev = r.first_collision
+    assert ev.fronts == (3, 4)  # the short facet [p_4, p_5] (0-based 3, 4)
+    assert np.isclose(ev.gap, ode.collision_distance, rtol=1e-6)
+    seg = r.segments[1]
+    assert seg.p.shape[1] == 6
+    C, _ = ode.constraints(seg.p[0], seg.cutoff)
+    assert np.linalg.norm(C) < 1e-10
+    P = r.positions
+    assert np.all(np.isnan(P[-1, [3, 4]])) and np.all(np.isfinite(P[-1, [0, 1, 2, 5, 6, 7]]))
+    # the energy decreases along the first segment
+    s0 = r.segments[0]
+    E = [ode.energy(q, s0.cutoff) for q in s0.p[:: max(1, len(s0.p) // 8)]]
+    assert np.all(np.diff(E) < 0)
+    # collision time independent of the ODE tolerance
+    r2 = ode.integrate(p, 0.08, rtol=1e-9, max_collisions=0)
+    assert abs(r2.first_collision.time - ev.time) < 1e-4 * ev.time
+
+
+def test_bad_input(triangle):
+    ode, p, cut = triangle
+    with pytest.raises(ValueError, match="alpha"):
+        FrontODE(-1.0, KSTAR, 2.0)
+    with pytest.raises(ValueError, match="p must"):
+        ode.velocity(p[::-1])
+    with pytest.raises(ValueError, match="p must"):
+        ode.velocity(p[:5])
+    with pytest.raises(ValueError, match="t_final"):
+        ode.integrate(p, -1.0)
