@@ -42,11 +42,15 @@ def run(args):
         lines += cha_lines(out.summary)
     pairs = [o.summary["n_sheet_pairs"] for o in runs]
     ratios = [o.summary["separation_ratio"] for o in runs]
+    min_ratios = [o.summary["min_separation_ratio"] for o in runs]
     summary = {
         "rho": sorted(args.rho),
         "n_sheet_pairs": pairs,
         "separation_ratio": ratios,
+        "min_separation_ratio": min_ratios,
         "all_within_10_percent": all(r is not None and abs(r - 1) <= 0.1 for r in ratios),
+        "all_closest_within_10_percent": all(r is not None and abs(r - 1) <= 0.1
+                                             for r in min_ratios),
         "more_folds_for_larger_rho": all(b >= a for a, b in zip(pairs, pairs[1:], strict=False))
         and pairs[-1] > pairs[0],
         "self_intersection": {f"{o.summary['params']['rho']:g}":

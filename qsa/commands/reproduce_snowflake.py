@@ -34,7 +34,8 @@ def cha_lines(s):
         f"{s['message']}",
         f"  paired sheets {s['n_sheet_pairs']}, separation {fmt(s['separation'], '.4g')} "
         f"vs l* sqrt(a^2+1/2) = {s['separation_target']:.4g} "
-        f"(ratio {fmt(s['separation_ratio'], '.3f')}, paper: within 10%)",
+        f"(median ratio {fmt(s['separation_ratio'], '.3f')}, closest-point ratio "
+        f"{fmt(s['min_separation_ratio'], '.3f')}; paper: within 10%)",
         f"  self-intersection: {'DETECTED' if sh['detected'] else 'none'}"
         + (f" (t = {sh['first_time']:.4g} .. {sh['last_time']:.4g}, "
            f"{sh['n_steps_crossing']} steps)" if sh["detected"] else "")

@@ -306,6 +306,11 @@ class SheetPairs:
         three or more layers).
     target : float
         The optimal separation ``l* sqrt(a^2 + 1/2)`` passed in (or ``nan``).
+    min_separations : ndarray, shape (n_pairs,)
+        Smallest separation of each pair: the local minimum of the distance,
+        where the paper's near-contact analysis (s:NSI) places the optimal
+        separation. On long flat sheets it equals the median; on short curved
+        contacts the median is biased up by the diverging ends.
     """
 
     n_pairs: int
@@ -315,6 +320,7 @@ class SheetPairs:
     separation: float = float("nan")
     n_stacked: int = 0
     target: float = float("nan")
+    min_separations: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def ratio(self) -> float:
@@ -330,6 +336,11 @@ class SheetPairs:
             "target": float(self.target),
             "ratio": float(self.separation / self.target) if self.target > 0 else None,
             "n_stacked_nodes": int(self.n_stacked),
+            "min_separations": [float(v) for v in self.min_separations],
+            "min_ratio": (float(np.min(self.min_separations) / self.target)
+                          if self.n_pairs and self.target > 0 else None),
+            "max_min_ratio": (float(np.max(self.min_separations) / self.target)
+                              if self.n_pairs and self.target > 0 else None),
         }
 
 
@@ -429,7 +440,7 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
         for node in nodes:
             key = (run_of[node], run_of[partner[k, node]], k)
             groups.setdefault(key, []).append(node)
-    seps, lens, run_list, seen = [], [], [], set()
+    seps, mins, lens, run_list, seen = [], [], [], [], set()
     for (ra, rb, k), nodes in sorted(groups.items()):
         if ra < 0 or rb < 0 or (rb, ra) in seen:
             continue
@@ -438,6 +449,7 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
             continue
         seen.add((ra, rb))
         seps.append(float(np.median(dist[k, nodes])))
+        mins.append(float(np.min(dist[k, nodes])))
         lens.append(float(nodes.size * h))
         partners = partner[k, nodes]
         run_list.append((int(nodes[0]), int(nodes[-1]), int(partners.min()),
@@ -446,7 +458,7 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
     stacked = int(np.sum(np.isfinite(dist).all(axis=0)))
     return SheetPairs(len(seps), np.asarray(seps), np.asarray(lens), run_list,
                       float(np.median(all_d)) if seps else float("nan"), stacked,
-                      float(separation))
+                      float(separation), np.asarray(mins))
 
 
 # --------------------------------------------------------- self-intersection

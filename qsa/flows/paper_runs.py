@@ -432,6 +432,7 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
         "n_sheet_pairs": sheets.n_pairs,
         "separation": sheets.separation, "separation_target": target,
         "separation_ratio": sheets.separation / target if sheets.n_pairs else None,
+        "min_separation_ratio": sheets.to_dict()["min_ratio"],
         "self_intersection": {
             "detected": bool(crossing_t.size),
             "first_time": float(crossing_t[0]) if crossing_t.size else None,

@@ -80,6 +80,16 @@ class FacetScenario:
     equilateral triangle with kappa*-rounded corners). ``L_star`` is the
     length the perimeter penalty favours; ``noise`` the relative amplitude of
     the radial perturbation in Fourier modes ``modes`` (seeded).
+
+    Why these numbers: on the circle the growth rate
+    ``-(k^2 - 1)^2 (alpha^2 k^2 / R^2 + W''(1/R)) / R^4`` peaks at k = 9 for
+    R = 0.44 (9 corner/facet pairs = 18 fronts); L* = 4.045 is the length of
+    the final triangle's neighbourhood (the run ends at L = 4.0456). Measured
+    (qsa reproduce facet): 18 fronts at t = 1.7e-5, six events 18 -> 16 -> ...
+    -> 6 at t = 3.7e-5 ... 0.138; at the paper's last figure time t = 2 the
+    corners still turn by 1.99 / 2.19 / 2.10 (rotation defect 0.099): the
+    symmetrising interaction is exponentially weak and the defect decays like
+    exp(-0.013 t), to 6e-4 at the default t_final = 400.
     """
 
     alpha: float = 0.1

@@ -122,6 +122,7 @@ def test_paired_sheets_of_a_stadium():
     sheets = paired_sheets(x, y, 0.012247)
     assert sheets.n_pairs == 1
     assert sheets.separation == pytest.approx(gap, rel=1e-6)
+    assert sheets.min_separations[0] == pytest.approx(gap, rel=1e-6)
     assert sheets.lengths[0] == pytest.approx(0.5, rel=0.1)
     assert sheets.n_stacked == 0
     assert sheets.ratio == pytest.approx(gap / 0.012247)
