@@ -95,11 +95,26 @@ class Curve:
     # ----------------------------------------------------------- derived data
     @property
     def N(self) -> int:
+        """Number of nodes of the grid."""
         return self.grid.N
 
     @property
     def dsigma(self) -> np.ndarray:
-        """Quadrature weights of ``dsigma = g ds``: ``int f dsigma ~= f @ c.dsigma``."""
+        """Quadrature weights of ``dsigma = g ds``: ``int f dsigma ~= f @ c.dsigma``.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            The weights of the inner product ``<f, h> = int f h dsigma``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> round(float(c.dsigma.sum() / np.pi), 12)
+        2.0
+        """
         return self.grid.weights * self.g
 
     @property
@@ -108,74 +123,262 @@ class Curve:
         return np.concatenate([self.kappa, self.g])
 
     def D(self, f) -> np.ndarray:
-        """The paper's ``D f = int_0^s f dsigma`` (e:D_def), at the nodes."""
+        """The paper's ``D f = int_0^s f dsigma`` (e:D_def), at the nodes.
+
+        Parameters
+        ----------
+        f : array_like, shape (N,) or (N, ...)
+
+        Returns
+        -------
+        ndarray, shape like ``f``
+            ``(D f)_0 = 0``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> bool(np.allclose(c.D(np.ones(17)), 2 * np.pi * c.grid.s))
+        True
+        """
         f = np.asarray(f, dtype=float)
         gg = self.g.reshape((-1,) + (1,) * (f.ndim - 1))
         return self.grid.cumulative(f * gg)
 
     def theta(self) -> np.ndarray:
-        """Tangent angle ``theta = theta0 + D kappa`` (e:theta-kappa), shape (N,)."""
+        """Tangent angle ``theta = theta0 + D kappa`` (e:theta-kappa).
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Not reduced modulo ``2 pi``: it grows by ``int kappa dsigma`` along S.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> bool(np.allclose(c.theta(), np.pi / 2 + 2 * np.pi * c.grid.s))
+        True
+        """
         if "theta" not in self._cache:
             self._cache["theta"] = self.theta0 + self.D(self.kappa)
         return self._cache["theta"]
 
     def tangent(self) -> np.ndarray:
-        """Unit tangent ``tau = (cos theta, sin theta)``, shape (2, N)."""
+        """Unit tangent ``tau = (cos theta, sin theta)``.
+
+        Returns
+        -------
+        ndarray, shape (2, N)
+
+        Examples
+        --------
+        >>> from qsa import Curve, Fourier
+        >>> Curve.circle(1.0, Fourier(17)).tangent()[:, 0].round(12).tolist()
+        [0.0, 1.0]
+        """
         th = self.theta()
         return np.array([np.cos(th), np.sin(th)])
 
     def normal(self) -> np.ndarray:
-        """Outward unit normal ``n = (sin theta, -cos theta)``, shape (2, N)."""
+        """Outward unit normal ``n = (sin theta, -cos theta)`` (counter-clockwise curves).
+
+        Returns
+        -------
+        ndarray, shape (2, N)
+
+        Examples
+        --------
+        >>> from qsa import Curve, Fourier
+        >>> Curve.circle(1.0, Fourier(17)).normal()[:, 0].round(12).tolist()
+        [1.0, -0.0]
+        """
         th = self.theta()
         return np.array([np.sin(th), -np.cos(th)])
 
     def positions(self) -> np.ndarray:
-        """Node positions ``gamma = gamma0 + D tau``, shape (2, N): ``x, y = c.positions()``."""
+        """Node positions ``gamma = gamma0 + D tau``: ``x, y = c.positions()``.
+
+        Returns
+        -------
+        ndarray, shape (2, N)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> x, y = Curve.circle(2.0, Fourier(17), center=(1.0, 0.0)).positions()
+        >>> bool(np.allclose(np.hypot(x - 1.0, y), 2.0))
+        True
+        """
         if "positions" not in self._cache:
             tau = self.tangent()
             self._cache["positions"] = np.asarray(self.origin)[:, None] + self.D(tau.T).T
         return self._cache["positions"]
 
     def length(self) -> float:
-        """Curve length ``L = int g ds``."""
+        """Curve length ``L = int g ds``.
+
+        Returns
+        -------
+        float
+
+        Examples
+        --------
+        >>> from qsa import Curve, FiniteDifference
+        >>> round(Curve.circle(0.5, FiniteDifference(16)).length(), 12)
+        3.14159265359
+        """
         return float(self.grid.integrate(self.g))
 
     def closure(self) -> np.ndarray:
         """Closure defect ``C(U) = (int tau dsigma, int kappa dsigma - 2 pi)``, shape (3,).
 
         Zero for a smoothly closed curve (e:C1, e:C2), up to quadrature error.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            ``(int cos theta dsigma, int sin theta dsigma, int kappa dsigma - 2 pi)``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> bool(np.linalg.norm(c.closure()) < 1e-12)
+        True
+        >>> np.round(c.with_kappa(1.1 * c.kappa).closure()[2], 6)  # turns by 2.2 pi
+        np.float64(0.628319)
         """
         tau = self.tangent()
         return np.array([tau[0] @ self.dsigma, tau[1] @ self.dsigma,
                          self.kappa @ self.dsigma - 2 * np.pi])
 
     def grad_s(self, f) -> np.ndarray:
-        """Surface gradient ``nabla_s f = (1/g) df/ds`` at the nodes."""
+        """Surface gradient ``nabla_s f = (1/g) df/ds`` at the nodes.
+
+        Parameters
+        ----------
+        f : array_like, shape (N,)
+
+        Returns
+        -------
+        ndarray, shape (N,)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> bool(np.allclose(c.grad_s(c.theta() - 2 * np.pi * c.grid.s), 0.0))
+        True
+        """
         return (self.grid.derivative() @ np.asarray(f, dtype=float)) / self.g
 
     # ---------------------------------------------------------------- copies
     def with_kappa(self, kappa) -> Curve:
-        """Copy with new curvature (same g, base point and angle)."""
+        """Copy with new curvature (same g, base point and angle).
+
+        Parameters
+        ----------
+        kappa : array_like, shape (N,)
+
+        Returns
+        -------
+        Curve
+
+        Examples
+        --------
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> float(c.with_kappa(2 * c.kappa).kappa[0]), float(c.kappa[0])
+        (2.0, 1.0)
+        """
         return Curve(kappa, self.g, self.grid, self.theta0, self.origin)
 
     def with_g(self, g) -> Curve:
-        """Copy with new arc-length density (same kappa, base point and angle)."""
+        """Copy with new arc-length density (same kappa, base point and angle).
+
+        Parameters
+        ----------
+        g : array_like, shape (N,) or scalar
+
+        Returns
+        -------
+        Curve
+
+        Examples
+        --------
+        >>> from qsa import Curve, Fourier
+        >>> round(Curve.circle(1.0, Fourier(17)).with_g(1.0).length(), 12)
+        1.0
+        """
         return Curve(self.kappa, g, self.grid, self.theta0, self.origin)
 
     def with_U(self, U) -> Curve:
-        """Copy from stacked unknowns ``U = [kappa, g]``, shape (2N,)."""
+        """Copy from stacked unknowns ``U = [kappa, g]``.
+
+        Parameters
+        ----------
+        U : array_like, shape (2N,)
+
+        Returns
+        -------
+        Curve
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> bool(np.array_equal(c.with_U(c.U).U, c.U)), c.U.shape
+        (True, (34,))
+        """
         U = np.asarray(U, dtype=float)
         if U.shape != (2 * self.N,):
             raise ValueError(f"U has shape {U.shape}, expected ({2 * self.N},)")
         return Curve(U[: self.N], U[self.N :], self.grid, self.theta0, self.origin)
 
     def on_grid(self, grid: Grid) -> Curve:
-        """The same curve sampled on another grid (interpolating kappa and g)."""
+        """The same curve sampled on another grid (interpolating kappa and g).
+
+        Parameters
+        ----------
+        grid : Grid
+
+        Returns
+        -------
+        Curve
+            Same ``theta0`` and base point; Fourier to Fourier is exact for
+            band-limited ``kappa, g``.
+
+        Examples
+        --------
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(33))
+        >>> fine = c.on_grid(Fourier(65))
+        >>> fine.N, round(fine.length(), 8) == round(c.length(), 8)
+        (65, True)
+        """
         return Curve(self.grid.resample(self.kappa, grid), self.grid.resample(self.g, grid),
                      grid, self.theta0, self.origin)
 
     def self_intersects(self) -> bool:
-        """Whether the node polygon crosses itself (non-adjacent segments intersect)."""
+        """Whether the node polygon crosses itself (non-adjacent segments intersect).
+
+        Returns
+        -------
+        bool
+
+        Examples
+        --------
+        >>> from qsa import Curve, Fourier
+        >>> Curve.circle(1.0, Fourier(17)).self_intersects()
+        False
+        """
         x, y = self.positions()
         return polygon_self_intersects(x, y)
 
@@ -185,6 +388,25 @@ class Curve:
         """Counter-clockwise circle of radius ``R`` (``kappa = 1/R``, ``g = 2 pi R``).
 
         The base point is ``center + (R, 0)``.
+
+        Parameters
+        ----------
+        R : float
+            Radius, ``> 0``.
+        grid : Grid
+        center : (float, float)
+
+        Returns
+        -------
+        Curve
+            ``kappa = 1/R``, ``g = 2 pi R``, ``theta0 = pi/2``.
+
+        Examples
+        --------
+        >>> from qsa import Curve, FiniteDifference
+        >>> c = Curve.circle(0.5, FiniteDifference(16))
+        >>> float(c.kappa[0]), float(c.g[0] / np.pi)
+        (2.0, 1.0)
         """
         R = float(R)
         if not (np.isfinite(R) and R > 0):
@@ -210,6 +432,19 @@ class Curve:
         The curve is resampled to constant arc length by Newton on the exact
         (spectrally interpolated) arc-length function; curvature comes from the
         interpolant's derivatives, ``kappa = (x'y'' - y'x'') / |gamma'|^3``.
+
+        Returns
+        -------
+        Curve
+            Constant ``g = L``, the first node at ``phi = 0``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(65))
+        >>> bool(np.ptp(c.g) == 0), bool(np.linalg.norm(c.closure()) < 1e-9)
+        (True, True)
         """
         if not callable(r):
             raise ValueError("r must be a callable r(phi)")
@@ -247,6 +482,25 @@ class Curve:
         On finite-difference grids the curvature is computed from the resampled
         positions with the grid's second-order stencils (as the paper's code does);
         on Fourier grids from the interpolant's derivatives.
+
+        Returns
+        -------
+        Curve
+            Constant ``g = L`` (the interpolant's length); ``origin`` the first sample.
+
+        Raises
+        ------
+        ValueError
+            Invalid samples (see :func:`qsa.resample.closed_samples`) or clockwise data.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> t = 2 * np.pi * np.arange(64) / 64
+        >>> c = Curve.from_positions(2 * np.cos(t), np.sin(t), Fourier(33))
+        >>> round(c.length(), 6)  # ellipse with semi-axes 2 and 1
+        9.688448
         """
         x, y = closed_samples(x, y, name="from_positions(x, y)")
         if interpolant == "auto":
@@ -282,6 +536,22 @@ def polygon_self_intersects(x, y) -> bool:
 
     Candidate edge pairs come from a k-d tree on edge midpoints (radius = the
     longest edge), so the cost is about O(N log N) for evenly sampled curves.
+
+    Parameters
+    ----------
+    x, y : array_like, shape (N,)
+        Vertices; the polygon closes from the last back to the first.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> polygon_self_intersects([0, 1, 1, 0], [0, 0, 1, 1])  # a square
+    False
+    >>> polygon_self_intersects([0, 1, 0, 1], [0, 0, 1, 1])  # a bow tie
+    True
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)

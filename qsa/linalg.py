@@ -22,12 +22,20 @@ class SparsePlusLowRank:
     instances, ``+``/``-`` with sparse or dense matrices, scalar ``*``,
     ``.T``, ``toarray()`` and ``aslinearoperator()``.
 
+    Parameters
+    ----------
+    S : sparse matrix or array_like, shape (n, m)
+    U : array_like, shape (n, r) or (n,)
+    V : array_like, shape (m, r) or (m,)
+
     Examples
     --------
     >>> import numpy as np, scipy.sparse as sp
     >>> A = SparsePlusLowRank(sp.identity(3), np.ones((3, 1)), np.ones((3, 1)))
     >>> A @ np.array([1.0, 0.0, 0.0])
     array([2., 1., 1.])
+    >>> A.shape, A.rank, bool(np.allclose((A @ A).toarray(), A.toarray() @ A.toarray()))
+    ((3, 3), 1, True)
     """
 
     __array_ufunc__ = None  # make ndarray @ self defer to __rmatmul__
@@ -42,20 +50,25 @@ class SparsePlusLowRank:
 
     @property
     def shape(self):
+        """``(n, m)``."""
         return self.S.shape
 
     @property
     def rank(self):
+        """Number ``r`` of columns of the low-rank factors (an upper bound of the rank)."""
         return self.U.shape[1]
 
     @property
     def T(self):
+        """Transpose ``S.T + V @ U.T``, again a :class:`SparsePlusLowRank`."""
         return SparsePlusLowRank(self.S.T, self.V, self.U)
 
     def toarray(self):
+        """Dense ``ndarray`` of shape ``(n, m)`` (O(n m) memory)."""
         return self.S.toarray() + self.U @ self.V.T
 
     def aslinearoperator(self):
+        """``scipy.sparse.linalg.LinearOperator`` with O(nnz + (n + m) r) products."""
         return spla.LinearOperator(self.shape, matvec=self.__matmul__, rmatvec=self.T.__matmul__,
                                    matmat=self.__matmul__, dtype=float)
 
@@ -109,11 +122,44 @@ class SparsePlusLowRank:
 
 
 def to_dense(A) -> np.ndarray:
-    """Dense ``ndarray`` copy of a dense, sparse or :class:`SparsePlusLowRank` matrix."""
+    """Dense ``ndarray`` copy of a dense, sparse or :class:`SparsePlusLowRank` matrix.
+
+    Parameters
+    ----------
+    A : ndarray, sparse matrix or SparsePlusLowRank, shape (n, m)
+
+    Returns
+    -------
+    ndarray, shape (n, m)
+        A new float array (never a view of ``A``).
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> to_dense(sp.identity(2)).tolist()
+    [[1.0, 0.0], [0.0, 1.0]]
+    """
     if isinstance(A, SparsePlusLowRank) or sp.issparse(A):
         return A.toarray()
     return np.array(A, dtype=float)
 
 
 def is_matrix_like(A) -> bool:
+    """Whether ``A`` is a matrix the operator layers accept.
+
+    Parameters
+    ----------
+    A : object
+
+    Returns
+    -------
+    bool
+        True for ``ndarray``, ``scipy.sparse`` matrices and :class:`SparsePlusLowRank`.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> is_matrix_like(np.eye(2)), is_matrix_like(sp.eye(2)), is_matrix_like([[1.0]])
+    (True, True, False)
+    """
     return isinstance(A, (np.ndarray, SparsePlusLowRank)) or sp.issparse(A)

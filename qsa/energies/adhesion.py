@@ -117,20 +117,42 @@ class AdhesionKernel:
 
     # ------------------------------------------------------------ the kernel
     def A(self, l):
-        """Kernel value ``A(l)``, ``l = |d|^2`` (any shape)."""
+        """Kernel value ``A(l)``, ``l = |d|^2`` (any shape).
+
+        Examples
+        --------
+        >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+        >>> float(k.A(0.25))  # zero at |d| = a l*
+        0.0
+        """
         s = self.l_star**2
         l = np.asarray(l, dtype=float)
         return self.A0 * (1.0 - l / (self.a**2 * s)) * np.exp(-l / s)
 
     def dA(self, l):
-        """``A'(l) = A0 (l/(a^2 l*^4) - (1 + a^2)/(a^2 l*^2)) exp(-l/l*^2)``."""
+        """``A'(l) = A0 (l/(a^2 l*^4) - (1 + a^2)/(a^2 l*^2)) exp(-l/l*^2)``.
+
+        Examples
+        --------
+        >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+        >>> bool(abs(k.dA(k.minimum_distance**2)) < 1e-12)
+        True
+        """
         s = self.l_star**2
         c = self.a**2 * s
         l = np.asarray(l, dtype=float)
         return self.A0 * (l / (c * s) - 1.0 / c - 1.0 / s) * np.exp(-l / s)
 
     def d2A(self, l):
-        """``A''(l) = A0 (2/(c s) + 1/s^2 - l/(c s^2)) exp(-l/s)``, ``s = l*^2, c = a^2 s``."""
+        """``A''(l) = A0 (2/(c s) + 1/s^2 - l/(c s^2)) exp(-l/s)``, ``s = l*^2, c = a^2 s``.
+
+        Examples
+        --------
+        >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+        >>> h = 1e-5
+        >>> bool(abs((k.dA(0.3 + h) - k.dA(0.3 - h)) / (2 * h) - k.d2A(0.3)) < 1e-6)
+        True
+        """
         s = self.l_star**2
         c = self.a**2 * s
         l = np.asarray(l, dtype=float)
@@ -140,7 +162,26 @@ class AdhesionKernel:
         return self.A(l)
 
     def derivatives(self, l, order=2):
-        """``(A, A', A'')`` (``order=2``) or ``(A, A')`` (``order=1``) with one exponential."""
+        """``(A, A', A'')`` (``order=2``) or ``(A, A')`` (``order=1``) with one exponential.
+
+        Parameters
+        ----------
+        l : array_like
+            Squared distances.
+        order : {1, 2}
+
+        Returns
+        -------
+        tuple of ndarray, each shaped like ``l``
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+        >>> A, dA, d2A = k.derivatives(np.array([0.1, 0.4]))
+        >>> bool(np.allclose(A, k.A(np.array([0.1, 0.4])))), len(k.derivatives(0.1, order=1))
+        (True, 2)
+        """
         s = self.l_star**2
         c = self.a**2 * s
         l = np.asarray(l, dtype=float)
@@ -154,12 +195,24 @@ class AdhesionKernel:
     # --------------------------------------------------------------- scales
     @property
     def minimum_distance(self) -> float:
-        """Distance ``l* sqrt(1 + a^2)`` at which ``A`` is minimal."""
+        """Distance ``l* sqrt(1 + a^2)`` at which ``A`` is minimal.
+
+        Examples
+        --------
+        >>> round(AdhesionKernel(A0=1.0, l_star=1.0, a=1.0).minimum_distance ** 2, 12)
+        2.0
+        """
         return self.l_star * math.sqrt(1.0 + self.a**2)
 
     @property
     def pair_separation(self) -> float:
-        """Optimal separation of two parallel strands, ``l* sqrt(a^2 + 1/2)`` (MATH.md 6)."""
+        """Optimal separation of two parallel strands, ``l* sqrt(a^2 + 1/2)`` (MATH.md 6).
+
+        Examples
+        --------
+        >>> round(AdhesionKernel(A0=1.0, l_star=2.0, a=1.0).pair_separation ** 2, 12)
+        6.0
+        """
         return self.l_star * math.sqrt(self.a**2 + 0.5)
 
     def cutoff_distance(self, rel=1e-16) -> float:
@@ -178,6 +231,13 @@ class AdhesionKernel:
         -------
         float
             The cutoff distance ``|d|`` (not squared).
+
+        Examples
+        --------
+        >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+        >>> r = k.cutoff_distance(1e-8)
+        >>> bool(abs(k.A(r**2)) <= 1e-8 * k.A0 and abs(k.A((0.9 * r) ** 2)) > 1e-8 * k.A0)
+        True
         """
         rel = float(rel)
         if not (0.0 < rel < 1.0):
@@ -227,6 +287,12 @@ def pair_list(x, y, cutoff):
     i, j : ndarray of intp, shape (P,)
         Pair indices, ``i < j``, sorted lexicographically. Each unordered pair
         appears once; use both orientations for symmetric sums.
+
+    Examples
+    --------
+    >>> i, j = pair_list([0, 1, 2, 3, 10], [0, 0, 0, 0, 0], 1.5)
+    >>> i.tolist(), j.tolist()
+    ([0, 1, 2], [1, 2, 3])
     """
     x, y = _check_positions(x, y)
     cutoff = _positive(cutoff, "cutoff")
@@ -254,6 +320,20 @@ def dense_pairs(N):
     """All pairs ``i < j`` of ``N`` nodes (the exact path, ``N (N-1)/2`` pairs).
 
     The arrays are cached per ``N`` and read-only (they depend on ``N`` alone).
+
+    Parameters
+    ----------
+    N : int
+
+    Returns
+    -------
+    i, j : ndarray of intp, shape (N (N - 1) / 2,)
+
+    Examples
+    --------
+    >>> i, j = dense_pairs(3)
+    >>> i.tolist(), j.tolist()
+    ([0, 0, 1], [1, 2, 2])
     """
     return _dense_pairs(int(N))
 
@@ -280,6 +360,21 @@ def adhesion_pairs(kernel, x, y, *, method="neighbours", rel=1e-16):
         ``"dense"``: every pair (exact, O(N^2)).
     rel : float
         Cutoff threshold passed to :meth:`AdhesionKernel.cutoff_distance`.
+
+    Returns
+    -------
+    i, j : ndarray of intp, shape (P,)
+        Pairs with ``i < j``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> k = AdhesionKernel(A0=1.0, l_star=0.05, a=1.0)
+    >>> t = 2 * np.pi * np.arange(200) / 200
+    >>> near = adhesion_pairs(k, np.cos(t), np.sin(t))
+    >>> every = adhesion_pairs(k, np.cos(t), np.sin(t), method="dense")
+    >>> near[0].size < every[0].size == 200 * 199 // 2
+    True
     """
     if method == "neighbours":
         return pair_list(x, y, kernel.cutoff_distance(rel))
@@ -317,13 +412,24 @@ def adhesion_energy(kernel, x, y, w, *, pairs=None, method="neighbours"):
     w : float or array_like, shape (N,)
         Node quadrature weights of dsigma (``L / N`` at scaled arc length).
     pairs : tuple of ndarray, optional
-        ``(i, j)`` with ``i < j`` from :func:`pair_list` / :func:`dense_pairs`;
+        ``(i, j)`` with ``i < j`` from :func:`pair_list` / :func:`dense_pairs`
         computed by ``method`` when omitted.
     method : {"neighbours", "dense"}
 
     Returns
     -------
     float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> k = AdhesionKernel(A0=2.0, l_star=0.5, a=1.0)
+    >>> adhesion_energy(k, [0.0, 0.5], [0.0, 0.0], 1.0)  # 2 A0 + 2 A(0.25) = 4 + 0
+    4.0
+    >>> t = 2 * np.pi * np.arange(64) / 64
+    >>> args = (k, np.cos(t), np.sin(t), 2 * np.pi / 64)
+    >>> bool(np.isclose(adhesion_energy(*args), adhesion_energy(*args, method="dense")))
+    True
     """
     x, y = _check_positions(x, y)
     w = _weights(w, x.size)
@@ -354,6 +460,21 @@ def adhesion_fields(kernel, x, y, w, *, pairs=None, method="neighbours"):
     force : ndarray, shape (N, 2)
         The two-point force 𝔸; ``dE_A/dX_i = w_i force_i``. The adhesion normal
         velocity is ``-(force . n + kappa B)`` (e:Adh-NV).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+    >>> t = 2 * np.pi * np.arange(64) / 64
+    >>> x, y = np.cos(t), np.sin(t)
+    >>> B, force = adhesion_fields(k, x, y, 2 * np.pi / 64)
+    >>> bool(np.ptp(B) < 1e-10), bool(np.allclose(force[:, 0] * y - force[:, 1] * x, 0))
+    (True, True)
+    >>> X = np.concatenate([x, y]); e = np.zeros(128); e[0] = 1e-6
+    >>> E = lambda X: adhesion_energy(k, X[:64], X[64:], 2 * np.pi / 64)
+    >>> fd = (E(X + e) - E(X - e)) / 2e-6
+    >>> bool(np.isclose(fd, 2 * np.pi / 64 * force[0, 0], rtol=1e-6))  # dE/dx_0 = w_0 F_0
+    True
     """
     x, y = _check_positions(x, y)
     N = x.size
@@ -376,6 +497,30 @@ def uniform_weight_fields(kernel, x, y, w, i, j):
 
     The inner loop of the flow models: ``x, y`` must be finite float arrays of
     shape (N,) and ``(i, j)`` a pair list with ``i < j``.
+
+    Parameters
+    ----------
+    kernel : AdhesionKernel
+    x, y : ndarray, shape (N,)
+    w : float
+    i, j : ndarray of intp, shape (P,)
+
+    Returns
+    -------
+    B : ndarray, shape (N,)
+    force : ndarray, shape (N, 2)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> k = AdhesionKernel(A0=10.0, l_star=0.3, a=1.0)
+    >>> t = 2 * np.pi * np.arange(32) / 32
+    >>> x, y = np.cos(t), 0.5 * np.sin(t)
+    >>> i, j = dense_pairs(32)
+    >>> B, F = uniform_weight_fields(k, x, y, 0.1, i, j)
+    >>> B2, F2 = adhesion_fields(k, x, y, 0.1, method="dense")
+    >>> bool(np.allclose(B, B2)), bool(np.allclose(F, F2))
+    (True, True)
     """
     N = x.size
     dx = x[i] - x[j]
@@ -416,6 +561,17 @@ def adhesion_normal_velocity(kernel, x, y, nx, ny, kappa, w, *, pairs=None,
     Returns
     -------
     ndarray, shape (N,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(65))
+    >>> (x, y), (nx, ny) = c.positions(), c.normal()
+    >>> k = AdhesionKernel(A0=10.0, l_star=0.3, a=1.0)
+    >>> V = adhesion_normal_velocity(k, x, y, nx, ny, c.kappa, c.dsigma)
+    >>> bool(abs(V @ (nx * c.dsigma)) < 1e-8 * np.abs(V).max())  # orthogonal to e1 . n
+    True
     """
     B, F = adhesion_fields(kernel, x, y, w, pairs=pairs, method=method)
     return -(F[:, 0] * np.asarray(nx) + F[:, 1] * np.asarray(ny) + np.asarray(kappa) * B)
@@ -423,7 +579,23 @@ def adhesion_normal_velocity(kernel, x, y, nx, ny, kappa, w, *, pairs=None,
 
 class PairDerivatives(NamedTuple):
     """Per unordered pair ``(i, j)``, ``i < j``: ``d = X_i - X_j``, ``A'(|d|^2)`` and
-    the symmetric 2x2 matrix ``H = 2 A''(|d|^2) d d^T + A'(|d|^2) I``."""
+    the symmetric 2x2 matrix ``H = 2 A''(|d|^2) d d^T + A'(|d|^2) I``.
+
+    Parameters
+    ----------
+    i, j : ndarray of intp, shape (P,)
+    dx, dy : ndarray, shape (P,)
+        Components of ``d``.
+    dA : ndarray, shape (P,)
+    hxx, hxy, hyy : ndarray, shape (P,)
+        Entries of ``H``.
+
+    Examples
+    --------
+    >>> t = adhesion_pair_derivatives(AdhesionKernel(1.0, 1.0, 1.0), [0.0, 1.0], [0.0, 0.0])
+    >>> t.i.tolist(), t.dx.tolist(), bool(t.hxy[0] == 0)
+    ([0], [-1.0], True)
+    """
 
     i: np.ndarray
     j: np.ndarray
@@ -453,6 +625,14 @@ def adhesion_pair_derivatives(kernel, x, y, *, pairs=None, method="neighbours"):
     -------
     PairDerivatives
         Fields ``i, j, dx, dy, dA, hxx, hxy, hyy``, each shape (P,).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
+    >>> t = adhesion_pair_derivatives(k, [0.0, 0.3, 0.0], [0.0, 0.0, 0.4], method="dense")
+    >>> bool(np.allclose(t.dA, k.dA(t.dx**2 + t.dy**2))), t.i.size
+    (True, 3)
 
     See Also
     --------
@@ -485,6 +665,18 @@ def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"
         ``dB_p / d(x, y)``; columns ordered ``[x_0..x_{N-1}, y_0..y_{N-1}]``.
     JF : scipy.sparse.csr_matrix, shape (2N, 2N)
         ``d(force_x, force_y) / d(x, y)``, rows ``[force_x; force_y]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> k = AdhesionKernel(A0=10.0, l_star=0.3, a=1.0)
+    >>> t = 2 * np.pi * np.arange(32) / 32
+    >>> X = np.concatenate([np.cos(t), 0.5 * np.sin(t)])
+    >>> JB, JF = adhesion_field_jacobians(k, X[:32], X[32:], 0.1, method="dense")
+    >>> V = np.sin(3 * np.arange(64)); h = 1e-6
+    >>> B = lambda X: adhesion_fields(k, X[:32], X[32:], 0.1, method="dense")[0]
+    >>> bool(np.allclose((B(X + h * V) - B(X - h * V)) / (2 * h), JB @ V, atol=1e-6))
+    True
     """
     x, y = _check_positions(x, y)
     N = x.size
@@ -569,27 +761,86 @@ class Adhesion(Energy):
         return x, y, c.dsigma
 
     def energy(self, c) -> float:
+        """Discrete ``E_A`` with ``w = dsigma`` (:func:`adhesion_energy`), a float."""
         x, y, w = self._data(c)
         return adhesion_energy(self.kernel, x, y, w, method=self.method)
 
     def fields(self, c):
-        """``(B, force)``: B shape (N,), the force 𝔸 shape (N, 2)."""
+        """``(B, force)``: B shape (N,), the force 𝔸 shape (N, 2).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        B : ndarray, shape (N,)
+        force : ndarray, shape (N, 2)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> B, force = Adhesion(10.0, 0.5).fields(Curve.circle(1.0, Fourier(33)))
+        >>> B.shape, force.shape, bool(np.ptp(B) < 1e-10)
+        ((33,), (33, 2), True)
+        """
         x, y, w = self._data(c)
         return adhesion_fields(self.kernel, x, y, w, method=self.method)
 
     def extrinsic_gradient(self, c) -> np.ndarray:
-        """``(𝔸.n + kappa B, 0)`` in ``<.,.>``, shape (2N,) (e:Adh-Ex_grad)."""
+        """``(𝔸.n + kappa B, 0)``, gradient in ``<f, h> = int f h dsigma`` (e:Adh-Ex_grad).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray, shape (2N,)
+            Stacked ``[normal, tangential]`` components; the tangential one is 0.
+        """
         B, force = self.fields(c)
         n = c.normal()
         return np.concatenate([force[:, 0] * n[0] + force[:, 1] * n[1] + c.kappa * B,
                                np.zeros(c.N)])
 
     def normal_velocity(self, c) -> np.ndarray:
-        """``V^n_A = -(𝔸.n + kappa B)``, shape (N,) (e:Adh-NV)."""
+        """``V^n_A = -(𝔸.n + kappa B)`` (e:Adh-NV).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray, shape (N,)
+        """
         return -self.extrinsic_gradient(c)[: c.N]
 
     def gradient(self, c) -> np.ndarray:
-        """Intrinsic gradient ``(M-dagger)^{-1} (𝔸.n + kappa B, 0)``, orthogonal to span Psi."""
+        """Intrinsic gradient ``(M-dagger)^{-1} (𝔸.n + kappa B, 0)``, orthogonal to span Psi.
+
+        Least squares in ``<f, h> = int f h dsigma`` (dense, O(N^3)).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray, shape (2N,)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier, geometry
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(65))
+        >>> E = Adhesion(10.0, 0.5)
+        >>> back = geometry.M_adjoint(c) @ E.gradient(c)
+        >>> bool(np.allclose(back, E.extrinsic_gradient(c), atol=1e-6))
+        True
+        """
         from qsa import geometry
         from qsa.linalg import to_dense
 
@@ -600,6 +851,7 @@ class Adhesion(Energy):
         return y / w
 
     def hessian(self, c):
+        """Not provided: raises ``NotImplementedError`` (the Hessian is nonlocal)."""
         raise NotImplementedError(
             "the intrinsic Hessian of a two-point energy is nonlocal and not provided; "
             "use extrinsic_gradient / normal_velocity, or the flow models' Jacobians")

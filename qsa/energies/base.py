@@ -33,7 +33,26 @@ __all__ = ["Energy", "EnergySum", "Perimeter", "add_matrices"]
 
 
 def add_matrices(a, b):
-    """Sum of two operator matrices of possibly different kinds (dense, sparse, low rank)."""
+    """Sum of two operator matrices of possibly different kinds (dense, sparse, low rank).
+
+    Parameters
+    ----------
+    a, b : ndarray, sparse matrix or SparsePlusLowRank, shape (n, m)
+
+    Returns
+    -------
+    ndarray, sparse matrix or SparsePlusLowRank, shape (n, m)
+        Dense if either is dense; a :class:`~qsa.linalg.SparsePlusLowRank` if either is
+        one and the other is sparse; sparse if both are.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> type(add_matrices(sp.identity(2), np.eye(2))).__name__
+    'ndarray'
+    >>> sp.issparse(add_matrices(sp.identity(2), sp.identity(2)))
+    True
+    """
     if isinstance(b, SparsePlusLowRank) and not isinstance(a, SparsePlusLowRank):
         return b + a
     if sp.issparse(a) and isinstance(b, np.ndarray):
@@ -56,19 +75,131 @@ def _check_param(value, name, positive=False, nonnegative=False):
 
 
 class Energy(ABC):
-    """An energy of a closed curve in intrinsic coordinates (see the module docstring)."""
+    """An energy of a closed curve in intrinsic coordinates (see the module docstring).
+
+    Subclasses implement :meth:`energy`, :meth:`gradient` and :meth:`hessian`; the
+    normal velocity and ``+`` (an :class:`EnergySum`) come for free. Energies take no
+    constructor arguments here; the models (``Faceting``, ``Perimeter`` ...) do.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> from qsa.energies import Faceting, Perimeter
+    >>> E = Faceting(alpha=0.1, kstar=5.0) + Perimeter(beta=5.0, L_star=6.0)
+    >>> isinstance(E, Energy), len(E.terms())
+    (True, 2)
+    """
 
     @abstractmethod
-    def energy(self, c: Curve) -> float: ...
+    def energy(self, c: Curve) -> float:
+        """The discrete energy ``E(U)``.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        float
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import CanhamHelfrich
+        >>> round(CanhamHelfrich(eps=1.0).energy(Curve.circle(0.5, Fourier(17))) / np.pi, 12)
+        2.0
+        """
 
     @abstractmethod
-    def gradient(self, c: Curve) -> np.ndarray: ...
+    def gradient(self, c: Curve) -> np.ndarray:
+        """``nabla_I E = (d_kappa E, d_g E)`` with respect to ``<f, h> = int f h dsigma``.
+
+        ``d/d delta E(U + delta U1) = <nabla_I E, U1>`` exactly for the discrete energy
+        and the discrete inner product ``sum f h dsigma``.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray, shape (2N,)
+            Stacked ``[d_kappa E, d_g E]``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import Faceting, Perimeter
+        >>> E = Faceting(alpha=0.1, kstar=5.0) + Perimeter(beta=5.0, L_star=6.0)
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(33))
+        >>> U1 = np.concatenate([np.cos(2 * np.pi * c.grid.s), np.ones(33)])
+        >>> d, w = 1e-6, np.concatenate([c.dsigma, c.dsigma])
+        >>> fd = (E.energy(c.with_U(c.U + d * U1)) - E.energy(c.with_U(c.U - d * U1))) / (2 * d)
+        >>> bool(np.isclose(fd, E.gradient(c) @ (U1 * w), rtol=1e-6))
+        True
+        """
 
     @abstractmethod
-    def hessian(self, c: Curve): ...
+    def hessian(self, c: Curve):
+        """``nabla_I^2 E`` with respect to ``<f, h> = int f h dsigma``; dsigma-self-adjoint.
+
+        ``d^2/d delta^2 E(U + delta U1) = <H U1, U1>`` along straight paths.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        matrix, shape (2N, 2N)
+            Dense ``ndarray`` (Fourier), sparse CSR or
+            :class:`~qsa.linalg.SparsePlusLowRank` (finite differences).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import Faceting, Perimeter
+        >>> E = Faceting(alpha=0.1, kstar=5.0) + Perimeter(beta=5.0, L_star=6.0)
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(33))
+        >>> U1 = np.concatenate([np.cos(2 * np.pi * c.grid.s), np.ones(33)])
+        >>> d, w = 1e-6, np.concatenate([c.dsigma, c.dsigma])
+        >>> f = lambda t: E.energy(c.with_U(c.U + t * U1))
+        >>> d = 1e-4
+        >>> second = (f(d) - 2 * f(0) + f(-d)) / d**2
+        >>> bool(np.isclose(second, (E.hessian(c) @ U1) @ (U1 * w), rtol=1e-5))
+        True
+        >>> A = w[:, None] * E.hessian(c)  # W H is symmetric
+        >>> bool(np.allclose(A, A.T))
+        True
+        """
 
     def normal_velocity(self, c: Curve) -> np.ndarray:
-        """Outward normal velocity ``V^n = -G d_kappa E - kappa (g d_g E)`` (e:L2grad), (N,)."""
+        """Outward normal velocity ``V^n = -G d_kappa E - kappa (g d_g E)`` (e:L2grad).
+
+        ``V^n = -[M-dagger nabla_I E]_1`` with the adjoint in ``<f, h> = int f h dsigma``.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray, shape (N,)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import CanhamHelfrich
+        >>> c = Curve.circle(2.0, Fourier(17))
+        >>> Vn = CanhamHelfrich(eps=1.0).normal_velocity(c)  # eps kappa^3 / 2
+        >>> bool(np.allclose(Vn, 1 / 16))
+        True
+        """
         from qsa.geometry import apply_laplace_s
 
         grad = self.gradient(c)
@@ -77,7 +208,19 @@ class Energy(ABC):
         return apply_laplace_s(c, mu) + c.kappa**2 * mu - c.kappa * ggE
 
     def terms(self) -> tuple:
-        """The summands (a single energy is its own only term)."""
+        """The summands (a single energy is its own only term).
+
+        Returns
+        -------
+        tuple of Energy
+
+        Examples
+        --------
+        >>> from qsa.energies import CanhamHelfrich
+        >>> E = CanhamHelfrich(1.0)
+        >>> E.terms() == (E,)
+        True
+        """
         return (self,)
 
     def __add__(self, other):
@@ -86,7 +229,20 @@ class Energy(ABC):
         return EnergySum(self.terms() + other.terms())
 
     def params(self) -> dict:
-        """JSON-serialisable parameters, with the energy's class name."""
+        """JSON-serialisable parameters, with the energy's class name.
+
+        Returns
+        -------
+        dict
+            ``{"energy": class name, <scalar attributes>}``; a sum gives
+            ``{"energy": "sum", "terms": [...]}``.
+
+        Examples
+        --------
+        >>> from qsa.energies import CanhamHelfrich
+        >>> CanhamHelfrich(0.5).params()
+        {'energy': 'CanhamHelfrich', 'eps': 0.5}
+        """
         out = {"energy": type(self).__name__}
         for k, v in getattr(self, "__dict__", {}).items():
             if isinstance(v, (int, float, str)):
@@ -96,7 +252,25 @@ class Energy(ABC):
 
 @dataclass(frozen=True)
 class EnergySum(Energy):
-    """Sum of energies; each method adds its summands' results."""
+    """Sum of energies; each method adds its summands' results.
+
+    Built by ``+`` on energies (sums are flattened).
+
+    Parameters
+    ----------
+    parts : tuple of Energy
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> from qsa.energies import CanhamHelfrich, Perimeter
+    >>> E = CanhamHelfrich(1.0) + Perimeter(beta=1.0, L_star=6.0)
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> type(E).__name__, len(E.terms())
+    ('EnergySum', 2)
+    >>> bool(abs(E.energy(c) - sum(e.energy(c) for e in E.terms())) < 1e-14)
+    True
+    """
 
     parts: tuple
 

@@ -24,11 +24,18 @@ class DoubleWell:
 
     ``W''(0) = W''(kstar) = kstar^2 / 2`` (MATH.md section 1).
 
+    Parameters
+    ----------
+    kstar : float
+        The second well, ``> 0``.
+
     Examples
     --------
     >>> w = DoubleWell(5.0)
     >>> float(w.W(5.0)), float(w.d2W(0.0))
     (0.0, 12.5)
+    >>> abs(float(w.dW(2.5))), float(w.W(2.5))  # the barrier at kstar / 2
+    (0.0, 9.765625)
     """
 
     kstar: float
@@ -37,14 +44,17 @@ class DoubleWell:
         object.__setattr__(self, "kstar", _check_param(self.kstar, "kstar", positive=True))
 
     def W(self, k):
+        """``W(k) = k^2 (k - kstar)^2 / 4``, shape like ``k``."""
         k = np.asarray(k)
         return 0.25 * k**2 * (k - self.kstar) ** 2
 
     def dW(self, k):
+        """``W'(k) = k (k - kstar)(2k - kstar) / 2``, shape like ``k``."""
         k = np.asarray(k)
         return 0.5 * k * (k - self.kstar) * (2 * k - self.kstar)
 
     def d2W(self, k):
+        """``W''(k) = (6k^2 - 6k kstar + kstar^2) / 2``, shape like ``k``."""
         k = np.asarray(k)
         return 0.5 * (6 * k**2 - 6 * k * self.kstar + self.kstar**2)
 
@@ -58,6 +68,13 @@ class Well:
     W, dW, d2W : callable
     kstar : float, optional
         The non-zero well (for constructions that need it).
+
+    Examples
+    --------
+    >>> from qsa.energies import Faceting
+    >>> w = Well(lambda k: k**2 * (k - 2.0)**2, lambda k: 0 * k, lambda k: 0 * k, kstar=2.0)
+    >>> float(w.W(1.0)), Faceting(0.1, 2.0, well=w).well is w
+    (1.0, True)
     """
 
     W: object
@@ -110,6 +127,7 @@ class Faceting(LocalEnergy):
         self.well = _as_well(well, self.kstar)
 
     def densities(self):
+        """``alpha^2/2 |p|^2`` on edges and ``W(kappa)`` on nodes."""
         w = self.well
         return (quadratic_gradient_density(self.alpha**2),
                 curvature_density(w.W, w.dW, w.d2W))

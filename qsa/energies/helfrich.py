@@ -35,6 +35,7 @@ class CanhamHelfrich(LocalEnergy):
         self.eps = _check_param(eps, "eps", nonnegative=True)
 
     def densities(self):
+        """``eps/2 kappa^2`` on nodes."""
         e = self.eps
         return (curvature_density(lambda k: 0.5 * e * k**2, lambda k: e * k,
                                   lambda k: np.full_like(np.asarray(k, dtype=float), e)),)

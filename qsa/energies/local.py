@@ -51,6 +51,15 @@ class Density:
         only for densities that do not depend on ``p``.
     uses_p : bool
         Whether the density depends on ``p``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> zero = lambda p, k: 0 * k
+    >>> d = Density(lambda p, k: k**2, zero, lambda p, k: 2 * k, zero, zero,
+    ...             lambda p, k: 2 + 0 * k, placement="node", uses_p=False)
+    >>> float(d.f(0.0, 3.0)), d.placement
+    (9.0, 'node')
     """
 
     f: object
@@ -91,9 +100,29 @@ def _as_array(v, like):
 
 
 class LocalEnergy(Energy):
-    """Sum of local density terms (see the module docstring); subclasses define ``densities``."""
+    """Sum of local density terms (see the module docstring); subclasses define ``densities``.
+
+    Gradients and Hessians are those of the discrete energy, exactly: Euclidean
+    (plain partial derivatives) or with respect to ``<f, h> = int f h dsigma`` (rows
+    divided by ``dsigma``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> from qsa.energies import Faceting
+    >>> E = Faceting(alpha=0.1, kstar=5.0)
+    >>> isinstance(E, LocalEnergy), len(E.densities())
+    (True, 2)
+    """
 
     def densities(self) -> tuple:
+        """The density terms.
+
+        Returns
+        -------
+        tuple of Density
+        """
         raise NotImplementedError
 
     def energy(self, c):
@@ -104,7 +133,27 @@ class LocalEnergy(Energy):
         return total
 
     def euclidean_gradient(self, c) -> np.ndarray:
-        """``(dE/dkappa_j, dE/dg_j)``: plain partial derivatives, shape (2N,)."""
+        """``(dE/dkappa_j, dE/dg_j)``: plain partial derivatives (Euclidean gradient).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray, shape (2N,)
+            Equal to ``gradient(c) * [dsigma, dsigma]``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import Faceting
+        >>> E, c = Faceting(0.1, 5.0), Curve.circle(1.0, Fourier(17))
+        >>> w = np.concatenate([c.dsigma, c.dsigma])
+        >>> bool(np.allclose(E.euclidean_gradient(c), E.gradient(c) * w))
+        True
+        """
         dk = np.zeros(c.N)
         dg = np.zeros(c.N)
         for t in self.densities():
@@ -121,12 +170,55 @@ class LocalEnergy(Energy):
         return np.concatenate([dk, dg])
 
     def gradient(self, c):
-        """``nabla_I E`` in ``<.,.>`` (e:FoE_IG), shape (2N,)."""
+        """``nabla_I E`` in ``<f, h> = int f h dsigma`` (e:FoE_IG).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray, shape (2N,)
+            ``[d_kappa E, d_g E]``; continuum ``(-nabla_s F_1 + F_0, (-F_1 nabla_s kappa
+            + F)/g)``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import Faceting, DoubleWell
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> grad = Faceting(0.1, 5.0).gradient(c)  # (W'(1), W(1)/g) on the unit circle
+        >>> bool(np.allclose(grad[:17], DoubleWell(5.0).dW(1.0)))
+        True
+        >>> bool(np.allclose(grad[17:], DoubleWell(5.0).W(1.0) / (2 * np.pi)))
+        True
+        """
         ds = c.dsigma
         return self.euclidean_gradient(c) / np.concatenate([ds, ds])
 
     def euclidean_hessian(self, c):
-        """Second partial derivatives of the discrete energy, shape (2N, 2N), symmetric."""
+        """Second partial derivatives of the discrete energy (Euclidean Hessian).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        sparse CSR matrix or ndarray, shape (2N, 2N)
+            Symmetric; ``hessian(c)`` is it with rows divided by ``dsigma``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, FiniteDifference
+        >>> from qsa.energies import Faceting
+        >>> c = Curve.circle(1.0, FiniteDifference(16))
+        >>> H = Faceting(0.1, 5.0).euclidean_hessian(c)
+        >>> H.shape, bool(abs(H - H.T).max() < 1e-12)
+        ((32, 32), True)
+        """
         grid = c.grid
         S = grid.sandwich  # S(X, b, Y) = X^T diag(b) Y
         zero = sp.csr_matrix((c.N, c.N)) if grid.sparse else np.zeros((c.N, c.N))
@@ -156,7 +248,29 @@ class LocalEnergy(Energy):
         return total
 
     def hessian(self, c):
-        """``nabla_I^2 E`` in ``<.,.>`` (e:cF-Hessian), shape (2N, 2N); dsigma-self-adjoint."""
+        """``nabla_I^2 E`` in ``<f, h> = int f h dsigma`` (e:cF-Hessian); dsigma-self-adjoint.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        sparse CSR matrix or ndarray, shape (2N, 2N)
+            ``d^2/d delta^2 E(U + delta U1) = <H U1, U1>``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import CanhamHelfrich
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> H = CanhamHelfrich(eps=2.0).hessian(c)
+        >>> U1 = np.concatenate([np.ones(17), np.zeros(17)])  # kappa -> kappa + 1
+        >>> w = np.concatenate([c.dsigma, c.dsigma])
+        >>> round(float((H @ U1) @ (U1 * w) / np.pi), 10)  # eps int 1 dsigma = 4 pi
+        4.0
+        """
         ds = c.dsigma
         winv = 1.0 / np.concatenate([ds, ds])
         H = self.euclidean_hessian(c)
@@ -191,6 +305,7 @@ class FirstOrderEnergy(LocalEnergy):
         self._density = Density(F, F_p, F_k, F_pp, F_pk, F_kk, placement="edge")
 
     def densities(self):
+        """``(Density(F, ...),)`` on edges."""
         return (self._density,)
 
 
