@@ -24,9 +24,9 @@ from qsa.commands.reproduce_convergence import PARAMS, paper_initial_curve
 from qsa.flows import CHA, FacetingFlow, solve_flow
 
 
-def timed(fn):
+def timed(fn, *args, **kwargs):
     c0, w0 = time.process_time(), time.perf_counter()
-    out = fn()
+    out = fn(*args, **kwargs)
     return out, time.process_time() - c0, time.perf_counter() - w0
 
 
@@ -37,8 +37,8 @@ def paper_example(Ns, targets):
           f"{'target':>7}")
     init = paper_initial_curve()
     for N in Ns:
-        res, cpu, wall = timed(lambda: solve_flow(CHA(**PARAMS), init, 0.2, N=N, tol=1e-4,
-                                                  t_eval=[0.2], progress=False))
+        res, cpu, wall = timed(solve_flow, CHA(**PARAMS), init, 0.2, N=N, tol=1e-4,
+                               t_eval=[0.2], progress=False)
         target = targets.get(N)
         verdict = "" if target is None else ("ok" if cpu <= target else "MISSED")
         print(f"{N:>5} {res.n_steps:>6} {res.n_newton:>7} {res.n_factorizations:>5} "
@@ -62,7 +62,7 @@ def cost_per_step(title, Ns, make_model, first_step, steps=4, target=None):
         stamps = []
         res = solve_flow(make_model(N), init, 1.0, N=N, tol=1e3, first_step=first_step,
                          max_step=first_step, max_steps=steps + 1, progress=False,
-                         t_eval=[1.0], callback=lambda t, y, s: stamps.append(
+                         t_eval=[1.0], callback=lambda t, y, s, stamps=stamps: stamps.append(
                              time.process_time()) and False)
         per = (stamps[-1] - stamps[0]) / (len(stamps) - 1)
         costs.append(per)
@@ -70,7 +70,8 @@ def cost_per_step(title, Ns, make_model, first_step, steps=4, target=None):
               f"{res.n_newton / res.n_steps:>11.1f} {res.n_factorizations / res.n_steps:>8.2f} "
               f"{per:>13.4f} {1e6 * per / N:>8.2f}")
     p = np.polyfit(np.log(Ns), np.log(costs), 1)[0]
-    verdict = "" if target is None else f"  (target <= {target}: {'ok' if p <= target else 'MISSED'})"
+    verdict = "" if target is None else (
+        f"  (target <= {target}: {'ok' if p <= target else 'MISSED'})")
     print(f"fitted exponent p = {p:.3f}{verdict}")
     return p
 
@@ -89,9 +90,9 @@ def dense_reference_ratio(Ns, passes):
         T = n * h
         kw = dict(N=N, tol=1e3, first_step=h, max_step=h, t_eval=[T], progress=False,
                   newton_tol=1e-9)
-        ours, c1, _ = timed(lambda: solve_flow(CHA(**PARAMS), init, T, **kw))
-        ref, c2, _ = timed(lambda: solve_flow(CHA(**PARAMS), init, T, linear_solver="dense",
-                                              reuse_factorizations=False, **kw))
+        ours, c1, _ = timed(solve_flow, CHA(**PARAMS), init, T, **kw)
+        ref, c2, _ = timed(solve_flow, CHA(**PARAMS), init, T, linear_solver="dense",
+                           reuse_factorizations=False, **kw)
         dx = np.max(np.abs(ours.states[-1][: 2 * N] - ref.states[-1][: 2 * N]))
         print(f"{N:>5} {ours.n_steps:>6} {c1 / n:>13.4f} {c2 / n:>15.4f} {c2 / c1:>7.1f} "
               f"{dx:>9.1e}")
