@@ -145,8 +145,7 @@ def prepare_initial(initial, N=None):
     ValueError
         For NaN, open or self-intersecting data, fewer than 4 points, or a bad N.
     """
-    from qsa.curve import Curve
-    from qsa.flows.models.curve_dae import self_intersections
+    from qsa.curve import Curve, self_intersections
     from qsa.resample import closed_samples, resample_closed
 
     if isinstance(initial, Curve):

@@ -173,3 +173,27 @@ def test_bad_input_raises_value_error():
     for args, kwargs, word in cases:
         with pytest.raises(ValueError, match=word):
             solve_flow(*args, **kwargs)
+
+
+@pytest.mark.parametrize("N, offset", [(3000, 0.0), (3000, 100.0), (30000, 100.0)])
+def test_equalize_chords_stops_at_round_off_for_large_N(N, offset):
+    # A fixed tolerance below round-off made the projection fail from N ~ 3000 on.
+    from qsa.flows import equalize_chords
+    from qsa.resample import resample_closed
+
+    x, y = paper_samples(4096)
+    X, Y, _ = resample_closed(x + offset, y, N, method="chord")
+    X = X + 1e-3 * (X[1] - X[0]) * np.random.default_rng(0).standard_normal(N)
+    X, Y, L = equalize_chords(X, Y)
+    c = np.hypot(np.roll(X, -1) - X, np.roll(Y, -1) - Y)
+    assert np.max(np.abs(c - L / N)) < 1e3 * np.finfo(float).eps * (offset + 2)
+
+
+def test_one_self_intersection_implementation():
+    from qsa.curve import polygon_self_intersects, self_intersections
+    from qsa.flows import self_intersections as flows_version
+
+    assert flows_version is self_intersections
+    th = 2 * np.pi * np.arange(50) / 50
+    assert polygon_self_intersects(np.sin(th), np.sin(2 * th))
+    assert not polygon_self_intersects(np.cos(th), np.sin(th))

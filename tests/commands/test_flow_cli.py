@@ -1,0 +1,79 @@
+"""``qsa flow`` and ``qsa reproduce convergence|timesteps`` (fast variants; the paper's full
+runs are marked slow)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from qsa.cli import main
+from qsa.io import load_npz
+
+
+def test_flow_cha_writes_data_figure_and_resumes(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["flow", "cha", "--N", "40", "--t-final", "0.01", "--tol", "1e-3",
+                 "--out", str(out), "--json", "--no-progress"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["success"] and summary["N"] == 40 and summary["t_final"] == 0.01
+    assert summary["energy_final"] < summary["energy_initial"]
+    for name in ("result.npz", "summary.json", "flow.png", "checkpoint.npz"):
+        assert (out / name).exists()
+    arrays, meta = load_npz(out / "result.npz")
+    assert arrays["states"].shape[0] == 6 and meta["n_steps"] == summary["n_steps"]
+    assert main(["flow", "cha", "--N", "40", "--t-final", "0.02", "--tol", "1e-3",
+                 "--resume", str(out / "checkpoint.npz"), "--json", "--no-progress"]) == 0
+    resumed = json.loads(capsys.readouterr().out)
+    assert resumed["t_final"] == 0.02 and resumed["n_steps"] > summary["n_steps"]
+
+
+def test_flow_facet_and_bad_input(tmp_path, capsys):
+    plot = tmp_path / "f.png"
+    assert main(["flow", "facet", "--N", "48", "--shape", "wobbly", "--alpha", "0.3",
+                 "--kstar", "2", "--t-final", "1e-3", "--tol", "1e-3", "--plot", str(plot),
+                 "--no-progress"]) == 0
+    assert "FacetingFlow N=48" in capsys.readouterr().out and plot.exists()
+    assert main(["flow", "cha", "--N", "40", "--tol", "-1", "--no-progress"]) == 2
+    assert "tol" in capsys.readouterr().err
+
+
+def test_reproduce_convergence_fast_variant(tmp_path, capsys):
+    assert main(["reproduce", "convergence", "--Ns", "24", "48", "96", "--t-final", "0.02",
+                 "--tol", "1e-3", "--normal", "centred", "--json",
+                 "--out", str(tmp_path)]) == 0
+    s = json.loads(capsys.readouterr().out)
+    d = s["results"]["centred"]["differences"]
+    assert set(d) == {"24", "48"} and d["48"] < d["24"]
+    assert (tmp_path / "positions.npz").exists() and (tmp_path / "convergence.png").exists()
+
+
+def test_reproduce_timesteps_fast_variant(capsys):
+    assert main(["reproduce", "timesteps", "--tols", "1e-2", "1e-3", "--N", "32",
+                 "--t-final", "0.02", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["be"]["0.001"]["steps"] > s["be"]["0.01"]["steps"]
+    assert s["bdf2"]["0.001"]["steps"] < s["be"]["0.001"]["steps"]
+
+
+# --------------------------------------------------------- the paper's runs
+@pytest.mark.slow
+def test_reproduce_convergence_matches_the_paper(capsys):
+    from qsa.commands.reproduce_convergence import PAPER
+
+    assert main(["reproduce", "convergence", "--normal", "centred", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)["results"]["centred"]
+    for N, ratio in s["ratios"].items():
+        assert abs(ratio - 4) <= 0.6, (N, ratio)
+    for N, d in s["differences"].items():
+        assert abs(d / PAPER[int(N)] - 1) <= 0.25, (N, d)
+
+
+@pytest.mark.slow
+def test_reproduce_timesteps_matches_the_paper(capsys):
+    from qsa.commands.reproduce_timesteps import PAPER
+
+    assert main(["reproduce", "timesteps", "--no-bdf2", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    for tol, steps in PAPER.items():
+        assert abs(s["be"][f"{tol:g}"]["steps"] / steps - 1) <= 0.15
+    assert abs(s["growth_per_decade"]["be"] / np.sqrt(10) - 1) <= 0.2
