@@ -72,6 +72,20 @@ decreases ``E`` at the rate ``p'^T G p'``. The front positions here are the
 splice parameters ``p_j``; on the profile they are the ``kstar / 2`` crossings
 up to the neighbours' tails (:meth:`FrontODE.crossings` gives the crossings).
 
+*Variable length.* With ``beta`` given, ``L`` is a further unknown and the
+energy gains ``beta/2 (L - L*)^2``. Lengthening the curve at fixed ``p``
+inserts arc at the base point ``sigma = L ~ 0`` (the middle of the last facet)
+and moves no point of ``[0, L)``: it has no normal velocity and costs no
+dissipation, but it changes ``C`` (``dC/dL ~ (cos theta(L), sin theta(L), 0)``)
+and, through the images of the fronts across the base point, ``E``. So ``L'``
+is tied to ``p'`` by the closure rows and the saddle-point system gains one
+unknown and one row: ``dC/dL L' + dC/dp p' = 0`` and ``(dC/dL) . mu =
+-(dE/dL + beta (L - L*))``. At the quasi-static length (``L' = 0``) of a stiff
+perimeter it reduces to the fixed-length flow (tested). ``dE/dL`` and
+``dC/dL`` are evaluated without seam errors by writing
+``d psi/dL = g - (sigma/L) psi'`` with ``g`` smooth and periodic and integrating
+the last term by parts.
+
 *Collisions.* When two neighbouring fronts come within ``d_c`` -- the spacing
 at which the superposed pair no longer crosses ``kstar / 2`` (``2 ln 3 /
 lambda`` for the quartic well) -- the splice manifold ends: the pair is
@@ -98,7 +112,9 @@ collision time converges like ``N^-2`` and was extrapolated from N = 600, 1200,
 (DAE, N -> inf), +1.0%; trapezoid with a short facet 0.06546 against 0.06331,
 +3.4%. At the DAE's own states the ODE closes the short facet 2-4% slower;
 part of it is the perimeter mode (the difference is 4.3%, 3.3%, 2.5%, 2.5% for
-beta = 0.5, 5, 50, 500), the rest (~2.5%) is not removed by a stiffer perimeter
+beta = 0.5, 5, 50, 500) and is captured by the variable-length reduction
+(``FrontODE(beta=...)``: 2.0%, 2.3%, 2.4%, 2.5%; triangle +0.33% against the
+extrapolated DAE), the rest (~2.5%) is not removed by a stiffer perimeter
 and does not depend on alpha at fixed ``lambda d`` (3.34% at alpha = 0.05 with
 the short facet halved, 3.35% at alpha = 0.1): it is not an O(alpha)
 correction. The splice's own ``V^n`` is 100x larger than its tangential part
