@@ -251,6 +251,7 @@ def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_m
         error_at[str(f)] = float(np.max(error[sel])) if np.any(sel) else np.nan
     return {"beta": beta, "collision_ode": float(tc),
             "collision_rel_diff": float(abs(tc - tc_dae) / tc_dae), "error_at": error_at,
+            "max_error": float(np.max(error[before])) if np.any(before) else np.nan,
             "time_ode": cpu, "speedup": time_dae / cpu, "nfev_ode": int(sol.nfev),
             "L_change": float(sol.segments[0].L[-1] - L)}
 
