@@ -139,7 +139,10 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         ``separated_until`` the last such time / ``t_c``), ``collision_distance``,
         ``error_at`` (``{fraction: error}``), ``max_error_rescaled`` (ODE time
         rescaled by ``t_c^ODE / t_c^DAE``), ``time_dae``, ``time_ode``,
-        ``speedup``, ``n_steps_dae``, ``nfev_ode``, ``N``, ``facet_min``.
+        ``speedup``, ``n_steps_dae``, ``nfev_ode``, ``N``, ``facet_min``, and
+        ``variable_length``: the same numbers for the reduction with the length as an
+        unknown (``FrontODE(beta=beta)``, Radau; positions compared as ``p``, which
+        differ from the crossings by the neighbours' tails only).
     """
     from qsa import FiniteDifference
     from qsa.flows import FacetingFlow, solve_flow
@@ -200,6 +203,8 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
             cs = Qs + ((cs - Qs + 0.5 * L) % L - 0.5 * L)
             cs -= cs.mean(axis=1, keepdims=True)
             rescaled = float(np.max(np.abs(cs - dae[: cs.shape[0]])) / facet_min)
+    variable = _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min,
+                                fractions, time_dae)
     # validity of the splice manifold: both fronts of every pair still separated
     dc = ode.collision_distance
     gaps_dae = np.min(np.abs(np.diff(np.sort(dae, axis=1), axis=1)), axis=1)
@@ -217,10 +222,38 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         "time_dae": time_dae, "time_ode": time_ode, "speedup": time_dae / time_ode,
         "n_steps_dae": int(res.n_steps), "nfev_ode": int(sol.nfev),
         "dae_message": res.message, "ode_message": sol.message,
+        "variable_length": variable,
     }
     p_ode = seg.p - seg.p.mean(axis=1, keepdims=True)
     return FrontComparison(t, dae, P, seg.t, p_ode, float(tc_dae), float(tc_ode), facet_min,
                            error, summary)
+
+
+def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min, fractions,
+                     time_dae, rtol=1e-5):
+    """Collision time and position errors of the variable-length reduction."""
+    ode = FrontODE(alpha, kstar, L, beta=beta)
+    start = time.process_time()
+    sol = ode.integrate(p0, t_final, rtol=rtol, method="Radau", max_collisions=0)
+    cpu = time.process_time() - start
+    tc = sol.first_collision.time if sol.events else np.nan
+    m = t <= (tc if np.isfinite(tc) else np.inf)
+    Q = ode.integrate(p0, t_final, t_eval=t[m], rtol=rtol, method="Radau",
+                      max_collisions=0).segments[0].p
+    P = np.full(dae.shape, np.nan)
+    P[: Q.shape[0]] = Q - Q.mean(axis=1, keepdims=True)
+    error = np.max(np.abs(P - dae), axis=1) / facet_min
+    finite = [v for v in (tc_dae, tc) if np.isfinite(v)]
+    before = (t < (min(finite) if finite else np.inf)) & np.isfinite(error)
+    error_at = {}
+    for f in fractions:
+        sel = before & (t <= f * tc_dae)
+        error_at[str(f)] = float(np.max(error[sel])) if np.any(sel) else np.nan
+    return {"beta": beta, "collision_ode": float(tc),
+            "collision_rel_diff": float(abs(tc - tc_dae) / tc_dae), "error_at": error_at,
+            "max_error": float(np.max(error[before])) if np.any(before) else np.nan,
+            "time_ode": cpu, "speedup": time_dae / cpu, "nfev_ode": int(sol.nfev),
+            "L_change": float(sol.segments[0].L[-1] - L)}
 
 
 def compare_eigenvalues(n_corners=3, facet=0.35, alpha=0.1, kstar=5.0, N=285,

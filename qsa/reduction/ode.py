@@ -72,6 +72,20 @@ decreases ``E`` at the rate ``p'^T G p'``. The front positions here are the
 splice parameters ``p_j``; on the profile they are the ``kstar / 2`` crossings
 up to the neighbours' tails (:meth:`FrontODE.crossings` gives the crossings).
 
+*Variable length.* With ``beta`` given, ``L`` is a further unknown and the
+energy gains ``beta/2 (L - L*)^2``. Lengthening the curve at fixed ``p``
+inserts arc at the base point ``sigma = L ~ 0`` (the middle of the last facet)
+and moves no point of ``[0, L)``: it has no normal velocity and costs no
+dissipation, but it changes ``C`` (``dC/dL ~ (cos theta(L), sin theta(L), 0)``)
+and, through the images of the fronts across the base point, ``E``. So ``L'``
+is tied to ``p'`` by the closure rows and the saddle-point system gains one
+unknown and one row: ``dC/dL L' + dC/dp p' = 0`` and ``(dC/dL) . mu =
+-(dE/dL + beta (L - L*))``. At the quasi-static length (``L' = 0``) of a stiff
+perimeter it reduces to the fixed-length flow (tested). ``dE/dL`` and
+``dC/dL`` are evaluated without seam errors by writing
+``d psi/dL = g - (sigma/L) psi'`` with ``g`` smooth and periodic and integrating
+the last term by parts.
+
 *Collisions.* When two neighbouring fronts come within ``d_c`` -- the spacing
 at which the superposed pair no longer crosses ``kstar / 2`` (``2 ln 3 /
 lambda`` for the quartic well) -- the splice manifold ends: the pair is
@@ -98,7 +112,9 @@ collision time converges like ``N^-2`` and was extrapolated from N = 600, 1200,
 (DAE, N -> inf), +1.0%; trapezoid with a short facet 0.06546 against 0.06331,
 +3.4%. At the DAE's own states the ODE closes the short facet 2-4% slower;
 part of it is the perimeter mode (the difference is 4.3%, 3.3%, 2.5%, 2.5% for
-beta = 0.5, 5, 50, 500), the rest (~2.5%) is not removed by a stiffer perimeter
+beta = 0.5, 5, 50, 500) and is captured by the variable-length reduction
+(``FrontODE(beta=...)``: 2.0%, 2.3%, 2.4%, 2.5%; triangle +0.33% against the
+extrapolated DAE), the rest (~2.5%) is not removed by a stiffer perimeter
 and does not depend on alpha at fixed ``lambda d`` (3.34% at alpha = 0.05 with
 the short facet halved, 3.35% at alpha = 0.1): it is not an O(alpha)
 correction. The splice's own ``V^n`` is 100x larger than its tangential part
@@ -254,10 +270,41 @@ class FrontODE:
         dpsi[:, 0::2] = -v1[:, :m]
         dpsi[:, 1::2] = v1[:, m:]
         w = L * grid.weights
-        cum = L * grid.cumulative(np.column_stack([psi, dpsi]))  # one FFT pair
-        theta, Theta = cum[:, 0], cum[:, 1:]
+        # d/dL at fixed p moves the periodic images: y = (sigma - c) - k L, dy/dL = -k
+        # psi_L jumps at the seam sigma = L ~ 0; g = psi_L + (sigma/L) psi' is smooth
+        k = np.rint((s[:, None] - prof.c - y) / L)
+        x = s / L
+        g = -np.sum(k * (v1[:, :m] - v1[:, m:]), axis=1) + x * d1
+        dg = -np.sum(k * (v2[:, :m] - v2[:, m:]), axis=1) + d1 / L + x * d2
+        cum = L * grid.cumulative(np.column_stack([psi, dpsi, g]))  # one FFT pair
+        theta, Theta = cum[:, 0], cum[:, 1:-1]
+        Theta_L = cum[:, -1] - x * psi + theta / L  # int_0^sigma psi_L, pointwise
         return {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "theta": theta,
-                "Theta": Theta, "n": np.size(p), "L": L}
+                "Theta": Theta, "n": np.size(p), "L": L, "g": g, "dg": dg,
+                "Theta_L": Theta_L}
+
+    def _length_derivatives(self, f):
+        """``dE_facet/dL`` and ``dC/dL`` at fixed ``p`` (shape (3,)).
+
+        ``E = int_0^L e dsigma`` gains the density at the end and the change of the
+        images' tails; ``C`` likewise (``theta(L) = 2 pi + C_3``).
+        """
+        W = self.front.well
+        a2 = self.alpha**2
+        psi, d1, w, L = f["psi"], f["d1"], f["w"], f["L"]
+        # with psi_L = g - (sigma/L) psi' and integration by parts every integral is
+        # of a smooth periodic function (spectral accuracy):
+        e = 0.5 * a2 * d1**2 + W.W(psi)
+        dE = (W.dW(psi) * f["g"] + a2 * d1 * f["dg"]) @ w + ((e - a2 * d1**2) @ w) / L
+        int_psi_L = f["g"] @ w - psi[0] + (psi @ w) / L
+        tL = f["theta"][0] + psi @ w  # theta(L)
+        c, s_ = np.cos(f["theta"]), np.sin(f["theta"])
+        # Theta_L jumps by int psi_L at the seam: end-corrected (trapezoid) sums
+        h2 = 0.5 * w[0]
+        dC1 = np.cos(tL) - (s_ * f["Theta_L"]) @ w - h2 * np.sin(tL) * int_psi_L
+        dC2 = np.sin(tL) + (c * f["Theta_L"]) @ w + h2 * np.cos(tL) * int_psi_L
+        dC = np.array([dC1, dC2, psi[0] + int_psi_L])
+        return float(dE), dC
 
     def _energy(self, f):
         return float((0.5 * self.alpha**2 * f["d1"] ** 2 + self.front.well.W(f["psi"]))
@@ -348,7 +395,8 @@ class FrontODE:
         With ``L`` (variable length, ``beta`` set) the unknowns are ``(p', L')``:
         inserting length at ``sigma = L`` moves no point of the curve (zero metric),
         so ``L'`` is tied to ``p'`` by the closure constraints; ``dE/dL`` and
-        ``dC/dL`` at fixed ``p`` are central differences (step ``1e-6 L``).
+        ``dC/dL`` at fixed ``p`` come from the images' tails
+        (:meth:`_length_derivatives`).
         """
         f = self._fields(p, cutoff, L)
         phi = self._normal(f)
@@ -358,11 +406,8 @@ class FrontODE:
         n = p.size
         A = np.vstack([J, np.ones((1, n)) / np.sqrt(n)])
         if L is not None:
-            h = 1e-6 * L
-            fp, fm = self._fields(p, cutoff, L + h), self._fields(p, cutoff, L - h)
-            dEL = (self._energy(fp) - self._energy(fm)) / (2 * h) \
-                + self.beta * (L - self.L_star)
-            dCL = (self._constraints(fp)[0] - self._constraints(fm)[0]) / (2 * h)
+            dEL, dCL = self._length_derivatives(f)
+            dEL += self.beta * (L - self.L_star)
             G = np.pad(G, ((0, 1), (0, 1)))
             dE = np.append(dE, dEL)
             A = np.column_stack([A, np.append(dCL, 0.0)])

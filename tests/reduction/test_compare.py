@@ -32,6 +32,9 @@ def test_short_facet_fast_variant():
     assert s["collision_rel_diff"] < 0.1
     assert s["error_at"]["0.5"] < 0.05
     assert c.dae.shape[1] == 8 and np.all(np.isfinite(c.dae))
+    v = s["variable_length"]
+    assert v["collision_rel_diff"] < 0.1 and v["error_at"]["0.5"] < 0.05
+    assert v["L_change"] < 0  # the collapsing facet shortens the curve, as in the DAE
 
 
 @pytest.mark.slow
@@ -42,6 +45,9 @@ def test_dae_vs_ode_resolved(scenario):
     # within 5% of the smallest facet up to 0.95 t_c; beyond, the error grows like
     # eps / (1 - t/t_c) (see qsa.reduction.ode, "Validity")
     assert s["error_at"]["0.95"] < 0.05
+    v = s["variable_length"]
+    assert v["collision_rel_diff"] < 0.1
+    assert v["error_at"]["0.95"] < 0.05
 
 
 def test_reproduce_fronts_cli(tmp_path, capsys):

@@ -202,3 +202,45 @@ def test_collision_across_the_base_point():
     assert seg.ids.tolist() == [2, 3, 4, 5, 6, 1]  # the first kept front is up-front 2
     assert np.all(np.diff(q) > 0) and q[-1] - q[0] < L
     assert np.linalg.norm(ode.constraints(q, seg.cutoff)[0]) < 1e-10
+
+
+@pytest.mark.parametrize("scenario", ["triangle", "short-facet"])
+def test_length_derivatives_match_differences(scenario):
+    from qsa.reduction.compare import scenario_splice
+
+    eq = scenario_splice(scenario)
+    p, L, cut = np.array(eq.params["positions"]), eq.params["L"], tuple(eq.params["cutoff"])
+    ode = FrontODE(ALPHA, KSTAR, L, beta=5.0, points_per_width=8)
+    dE, dC = ode._length_derivatives(ode._fields(p, cut, L))
+    h = 1e-5
+    fp, fm = ode._fields(p, cut, L + h), ode._fields(p, cut, L - h)
+    fdE = (ode._energy(fp) - ode._energy(fm)) / (2 * h)
+    fdC = (ode._constraints(fp)[0] - ode._constraints(fm)[0]) / (2 * h)
+    assert abs(dE - fdE) < 1e-6 * abs(fdE) and abs(fdE) > 1e-5  # the wrap facet's force
+    assert np.max(np.abs(dC - fdC)) < 1e-8
+
+
+def test_variable_length_dissipates_and_tends_to_fixed_length(triangle):
+    ode, p, cut = triangle
+    L = ode.length
+    var = FrontODE(ALPHA, KSTAR, L, beta=5.0, points_per_width=8, L_star=L + 0.01)
+    dp, dL = var.velocity_length(p, L, cut)
+    f = var._fields(p, cut, L)
+    dEL, dC = var._length_derivatives(f)
+    _, J = var._constraints(f)
+    assert np.max(np.abs(J @ dp + dC * dL)) < 1e-10  # closure kept with L moving
+    dEdt = var._gradient(f) @ dp + (dEL + 5.0 * (L - var.L_star)) * dL
+    assert dEdt < 0 and dL > 0  # too short: the perimeter term lengthens the curve
+    # stiff perimeter: at the quasi-static length (L' = 0) the positions move as in the
+    # fixed-length reduction (the L direction costs no dissipation by itself)
+    from scipy.optimize import brentq
+
+    stiff = FrontODE(ALPHA, KSTAR, L, beta=1e4, points_per_width=8)
+    Lq = brentq(lambda x: stiff.velocity_length(p, x, cut)[1], L - 1e-4, L + 1e-4,
+                xtol=1e-15)
+    assert abs(Lq - L) < 1e-6
+    dp_stiff = stiff.velocity_length(p, Lq, cut)[0]
+    fixed = ode.velocity(p, cut)
+    assert np.max(np.abs(dp_stiff - fixed)) < 1e-3 * np.max(np.abs(fixed))
+    with pytest.raises(ValueError, match="beta"):
+        ode.velocity_length(p, L)
