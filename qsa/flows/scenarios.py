@@ -139,6 +139,10 @@ class CHAScenario:
     initial length is about 13.7, so ``N = 2400`` gives ``L/N = 0.0057`` at the
     start and ``0.008 rho/1.4`` at the equilibrium length ``rho L0``, below
     ``l* = 0.01``).
+
+    Resolution (``resolution_check``): N = 2400 against 4800 to t = 2e-3, the
+    buckling transient, the node positions differ by at most 4.4e-5 =
+    0.0044 l* (0.36% of the pair separation).
     """
 
     rho: float = 1.3

@@ -1,0 +1,46 @@
+"""Wall time of the paper's full-scale simulations (issue 6 targets: facet <= 10 min,
+each CHA run <= 20 min on 2 cores).
+
+Prints one table row per run: final time, nodes, accepted steps, wall seconds
+and the headline result (fronts / symmetry defect for the facet run; sheet
+pairs / separation ratio for CHA). ``--quick`` runs only the faceting
+coarsening to the paper's t = 2; ``--cha`` adds the three folding runs
+(about 4-7 minutes each at N = 2400 on a loaded machine).
+
+Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_paper_runs.py [--quick] [--cha]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+
+from qsa.flows.paper_runs import run_cha, run_facet
+from qsa.flows.scenarios import CHAScenario, FacetScenario
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="facet to t = 2 only")
+    parser.add_argument("--cha", action="store_true", help="also the three CHA folding runs")
+    args = parser.parse_args()
+    print(f"{'run':14s}{'t_final':>9s}{'N':>6s}{'steps':>7s}{'wall s':>9s}  result")
+    with tempfile.TemporaryDirectory() as out:
+        for t_final in (2.0,) if args.quick else (2.0, 400.0):
+            s = run_facet(FacetScenario(), f"{out}/facet{t_final:g}", t_final=t_final,
+                          progress=False).summary
+            print(f"{'facet':14s}{t_final:9g}{600:6d}{s['n_steps']:7d}{s['wall_seconds']:9.1f}"
+                  f"  fronts {s['peak_fronts']}->{s['final_fronts']} in {s['n_events']} events,"
+                  f" 3-fold defect {s['final_rotation_defect']:.2g}")
+        if args.cha:
+            for rho in (1.2, 1.3, 1.4):
+                s = run_cha(CHAScenario(rho=rho), out, progress=False).summary
+                ratio = s["separation_ratio"]
+                print(f"{'cha rho=' + format(rho, 'g'):14s}{s['t_final']:9g}{s['params']['N']:6d}"
+                      f"{s['n_steps']:7d}{s['wall_seconds']:9.1f}  sheet pairs "
+                      f"{s['n_sheet_pairs']}, separation ratio "
+                      f"{'-' if ratio is None else format(ratio, '.3f')}")
+
+
+if __name__ == "__main__":
+    main()
