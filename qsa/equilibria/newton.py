@@ -94,6 +94,18 @@ class PolishResult(Equilibrium):
         Final unfolding parameters ``a`` (zero up to round-off at a true equilibrium).
     noise_floor : float
         Estimated round-off level of the relative residual on this grid.
+
+    Parameters
+    ----------
+    Constructed by :func:`polish`; the fields are the attributes above.
+
+    Examples
+    --------
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> res = polish(eq.energy, eq.curve)
+    >>> bool(res.success), res.status, res.n_iter <= 2
+    (True, 0, True)
     """
 
     status: int = 0
@@ -205,6 +217,24 @@ def normal_velocity(energy, c: Curve) -> np.ndarray:
     Terms that use the generic formula ``V^n = (Delta_s + kappa^2) mu - kappa xi``
     are evaluated with ``Delta_s`` applied matrix-free (O(N^2) instead of O(N^3)
     on Fourier grids); other terms call their own ``normal_velocity``.
+
+    Parameters
+    ----------
+    energy : Energy
+    c : Curve
+
+    Returns
+    -------
+    ndarray, shape (N,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(0.8, 0.1, kstar=5.0)
+    >>> V = normal_velocity(eq.energy, eq.curve)
+    >>> bool(np.allclose(V, eq.energy.normal_velocity(eq.curve))), bool(np.abs(V).max() < 1e-8)
+    (True, True)
     """
     from qsa.energies.base import Energy, Perimeter
 
@@ -236,6 +266,22 @@ def residual_scale(energy, curve: Curve) -> float:
     ``Delta_s W'(kappa)``, ``kappa^2 mu`` and ``kappa g d_g E`` (as for
     :func:`qsa.equilibria.npulse.faceting_residual`). ``max|V^n| / residual_scale``
     is the relative residual.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> round(residual_scale(eq.energy, eq.curve), 10)  # kappa^2 mu = W'(1) = 6
+    6.0
     """
     N = curve.N
     scale = 0.0
@@ -254,6 +300,25 @@ def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
     (MATH.md section 4). For circles ``Psi_1, Psi_2`` are not independent of
     ``Psi_3`` on a translation-invariant curve only if degenerate; a pseudo-inverse
     of the Gram matrix is used.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+    gradient : ndarray, shape (2N,), optional
+        ``nabla_I E`` in ``<f, h> = int f h dsigma`` if already computed.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> np.round(multipliers(eq.energy, eq.curve), 8).tolist()  # (0, 0, W'(1/R))
+    [0.0, -0.0, 6.0]
     """
     from qsa.geometry import constraint_gradients
 
@@ -296,6 +361,17 @@ class EquilibriumSystem:
     reference : Curve
         Initial guess with constant ``g``: supplies the grid, ``theta0``, ``gamma(0)``,
         the phase reference and the unfolding fields ``phi_j``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> system = EquilibriumSystem(eq.energy, eq.curve)
+    >>> x = system.pack(eq.curve)  # [kappa, L, a, ...]: 33 + 3 unknowns
+    >>> F = system.residual(x)
+    >>> x.size, bool(np.abs(F).max() < 1e-10), system.jacobian(x).shape == (36, 36)
+    (36, True, True)
     """
 
     def __init__(self, energy, reference: Curve):
