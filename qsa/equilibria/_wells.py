@@ -33,12 +33,15 @@ class QuarticWell:
     kstar: float
 
     def W(self, k):
+        """``W(k)``, shape like ``k``."""
         return 0.25 * k**2 * (k - self.kstar) ** 2
 
     def dW(self, k):
+        """``W'(k)``, shape like ``k``."""
         return 0.5 * k * (k - self.kstar) * (2 * k - self.kstar)
 
     def d2W(self, k):
+        """``W''(k)``, shape like ``k``."""
         return 0.5 * (6 * k**2 - 6 * k * self.kstar + self.kstar**2)
 
 

@@ -125,6 +125,7 @@ class BranchPoint:
 
     @property
     def curve(self) -> Curve:
+        """``equilibrium.curve``."""
         return self.equilibrium.curve
 
 
@@ -194,6 +195,7 @@ class Branch:
 
     @property
     def n_unstable(self) -> np.ndarray | None:
+        """Unstable counts per point, shape (n_points,), or None without ``stability=True``."""
         if any(p.n_unstable is None for p in self.points):
             return None
         return np.array([p.n_unstable for p in self.points], dtype=int)
@@ -203,6 +205,7 @@ class Branch:
         return np.array([p.equilibrium.energy.energy(p.curve) for p in self.points])
 
     def summary(self) -> dict:
+        """JSON-serialisable summary (parameter values, lengths, residuals, folds ...)."""
         return {
             "param": self.param, "method": self.method, "success": bool(self.success),
             "status": int(self.status), "message": self.message,

@@ -115,6 +115,7 @@ class PolishResult(Equilibrium):
     noise_floor: float = 0.0
 
     def summary(self) -> dict:
+        """The :meth:`Equilibrium.summary` plus the Newton record (status, n_iter, history)."""
         out = super().summary()
         out.update(status=int(self.status), n_iter=int(self.n_iter),
                    history=[float(h) for h in self.history],
@@ -401,9 +402,11 @@ class EquilibriumSystem:
 
     # state <-> curve
     def pack(self, curve: Curve) -> np.ndarray:
+        """Unknowns ``x = [kappa (N,), L, a (n_unfold,)]`` of a constant-g curve, ``a = 0``."""
         return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold)])
 
     def curve(self, x) -> Curve:
+        """The :class:`~qsa.curve.Curve` of unknowns ``x`` (``g = L``, reference base point)."""
         N = self.N
         return Curve(x[:N], x[N], self.grid, self.ref.theta0, self.ref.origin)
 

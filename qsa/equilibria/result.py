@@ -102,4 +102,5 @@ class Equilibrium:
         }
 
     def to_json(self) -> str:
+        """:meth:`summary` as an indented JSON string."""
         return json.dumps(self.summary(), indent=2)
