@@ -137,6 +137,15 @@ class Heteroclinic:
     def complement(self, sigma):
         """``kstar - psi_h(sigma)`` without cancellation (the upper tail); shape like sigma.
 
+        Parameters
+        ----------
+        sigma : array_like
+            Arc length from the front centre (``psi_h(0) = kstar / 2`` for symmetric wells).
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
+
         Examples
         --------
         >>> h = heteroclinic(0.1, kstar=5.0)
@@ -150,6 +159,14 @@ class Heteroclinic:
 
         Computed from the quadrature (not from the first integral), so it is an
         independent check of the ODE.
+
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
 
         Examples
         --------
@@ -166,6 +183,14 @@ class Heteroclinic:
     def second_derivative(self, sigma):
         """``psi_h''(sigma) = W'(psi_h) / alpha^2`` (from the ODE itself).
 
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
+
         Examples
         --------
         >>> import numpy as np
@@ -178,6 +203,15 @@ class Heteroclinic:
 
     def position(self, psi):
         """Arc length ``sigma`` where ``psi_h(sigma) = psi``, for ``0 < psi < kstar``.
+
+        Parameters
+        ----------
+        psi : float or array_like
+            Values in ``(0, kstar)``.
+
+        Returns
+        -------
+        float or ndarray, shape like ``psi``
 
         Examples
         --------

@@ -411,7 +411,19 @@ class EquilibriumSystem:
         return Curve(x[:N], x[N], self.grid, self.ref.theta0, self.ref.origin)
 
     def residual(self, x, energy=None) -> np.ndarray:
-        """``F(x)``, shape (size,): ``[V^n + a.phi, C, phase]``."""
+        """``F(x)``, shape (size,): ``[V^n + a.phi, C, phase]``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (size,)
+            Unknowns (:meth:`pack`).
+        energy : Energy, optional
+            Another energy on the same system (default the system's).
+
+        Returns
+        -------
+        ndarray, shape (size,)
+        """
         energy = self.energy if energy is None else energy
         N = self.N
         c = self.curve(x)
@@ -423,7 +435,21 @@ class EquilibriumSystem:
         return np.concatenate(parts)
 
     def scaled_parts(self, F, c: Curve, scale: float) -> np.ndarray:
-        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,)."""
+        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,).
+
+        Parameters
+        ----------
+        F : ndarray, shape (size,)
+            :meth:`residual`.
+        c : Curve
+            :meth:`curve` of the same ``x``.
+        scale : float
+            :func:`residual_scale` at ``c``.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+        """
         N = self.N
         out = np.zeros(3)
         out[0] = np.max(np.abs(F[:N])) / scale
@@ -433,7 +459,17 @@ class EquilibriumSystem:
         return out
 
     def merit(self, F, c: Curve, scale: float) -> float:
-        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows)."""
+        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows).
+
+        Parameters
+        ----------
+        F, c, scale
+            As in :meth:`scaled_parts`.
+
+        Returns
+        -------
+        float
+        """
         N = self.N
         m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
         if self.phase is not None:
@@ -441,7 +477,17 @@ class EquilibriumSystem:
         return float(np.sqrt(m))
 
     def scaled_norm(self, F, c: Curve, scale: float) -> float:
-        """``max`` of :meth:`scaled_parts`: the relative residual of the square system."""
+        """``max`` of :meth:`scaled_parts`: the relative residual of the square system.
+
+        Parameters
+        ----------
+        F, c, scale
+            As in :meth:`scaled_parts`.
+
+        Returns
+        -------
+        float
+        """
         return float(np.max(self.scaled_parts(F, c, scale)))
 
     def jacobian_parts(self, x, energy=None):
@@ -503,7 +549,18 @@ class EquilibriumSystem:
         return A, B, Crows, D, low
 
     def jacobian(self, x, energy=None):
-        """Assembled ``dF/dx``, shape (size, size): sparse CSC for FD, dense for Fourier."""
+        """Assembled ``dF/dx``, shape (size, size): sparse CSC for FD, dense for Fourier.
+
+        Parameters
+        ----------
+        x : ndarray, shape (size,)
+        energy : Energy, optional
+
+        Returns
+        -------
+        sparse CSC matrix or ndarray, shape (size, size)
+            Euclidean derivative ``dF/dx`` (no inner-product weights).
+        """
         A, B, Crows, D, low = self.jacobian_parts(x, energy)
         return _assemble(A, B, Crows, D, low)
 

@@ -277,6 +277,14 @@ class PeriodicOrbit:
     def derivative(self, sigma):
         """``psi'(sigma) = (dpsi/dv) / (dsigma/dv)``, from the quadrature; shape like sigma.
 
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
+
         Examples
         --------
         >>> import numpy as np
