@@ -233,8 +233,8 @@ class Heteroclinic:
 
         Examples
         --------
-        >>> round(float(heteroclinic(0.1, kstar=5.0).tension), 10)
-        1.4731391275
+        >>> round(float(heteroclinic(0.1, kstar=5.0).tension), 8)  # alpha kstar^3 / (6 sqrt 2)
+        1.47313913
         """
         if self.closed_form:
             return self.alpha * self.kstar**3 / (6 * np.sqrt(2))

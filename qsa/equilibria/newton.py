@@ -318,8 +318,8 @@ def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
     >>> import numpy as np
     >>> from qsa.equilibria import circle
     >>> eq = circle(1.0, 0.1, kstar=5.0)
-    >>> np.round(multipliers(eq.energy, eq.curve), 8).tolist()  # (0, 0, W'(1/R))
-    [0.0, -0.0, 6.0]
+    >>> (np.round(multipliers(eq.energy, eq.curve), 8) + 0.0).tolist()  # (0, 0, W'(1/R))
+    [0.0, 0.0, 6.0]
     """
     from qsa.geometry import constraint_gradients
 

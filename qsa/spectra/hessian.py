@@ -168,8 +168,8 @@ class LagrangeHessian:
     >>> from qsa.equilibria import circle
     >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
     >>> LH = lagrange_hessian(eq.energy, eq.curve)
-    >>> np.round(LH.multipliers, 8).tolist(), bool(LH.relative_projection_residual < 1e-12)
-    ([-0.0, 0.0, 6.0], True)
+    >>> (np.round(LH.multipliers, 8) + 0.0).tolist(), bool(LH.relative_projection_residual < 1e-12)
+    ([0.0, 0.0, 6.0], True)
     """
 
     matrix: object
