@@ -7,8 +7,8 @@ perimeter target that makes it an exact equilibrium. With ``nu1 = 0`` and the
 symmetric well each pulse spends half its period ``T`` at ``kappa ~ kstar``, so the
 turning ``kstar T / 2 = 2 pi / N`` fixes ``L = N T = 4 pi / kstar`` for every N; ``L*``
 grows with N (``beta (L - L*) = nu2 < 0``). The spectrum of J (normal gauge,
-``<f, h> = int f h dsigma``) counts the unstable directions: the coarsening modes of
-the N pulses, ``2 N - 4`` of them here, while the 2-pulse is stable.
+``<f, h> = int f h dsigma``) counts the unstable directions: ``2 N - 4`` of them
+(measured here; the 2-pulse is stable), besides the 3 rigid motions in its kernel.
 
 Run: ``python examples/ex02_npulse_family.py``.
 """

@@ -176,7 +176,7 @@ class Curve:
         Examples
         --------
         >>> from qsa import Curve, Fourier
-        >>> Curve.circle(1.0, Fourier(17)).tangent()[:, 0].round(12).tolist()
+        >>> (Curve.circle(1.0, Fourier(17)).tangent()[:, 0].round(12) + 0.0).tolist()
         [0.0, 1.0]
         """
         th = self.theta()
@@ -192,8 +192,8 @@ class Curve:
         Examples
         --------
         >>> from qsa import Curve, Fourier
-        >>> Curve.circle(1.0, Fourier(17)).normal()[:, 0].round(12).tolist()
-        [1.0, -0.0]
+        >>> (Curve.circle(1.0, Fourier(17)).normal()[:, 0].round(12) + 0.0).tolist()
+        [1.0, 0.0]
         """
         th = self.theta()
         return np.array([np.sin(th), -np.cos(th)])

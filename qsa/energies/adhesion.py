@@ -119,6 +119,15 @@ class AdhesionKernel:
     def A(self, l):
         """Kernel value ``A(l)``, ``l = |d|^2`` (any shape).
 
+        Parameters
+        ----------
+        l : array_like
+            Squared distances.
+
+        Returns
+        -------
+        ndarray, shape like ``l``
+
         Examples
         --------
         >>> k = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)
@@ -131,6 +140,15 @@ class AdhesionKernel:
 
     def dA(self, l):
         """``A'(l) = A0 (l/(a^2 l*^4) - (1 + a^2)/(a^2 l*^2)) exp(-l/l*^2)``.
+
+        Parameters
+        ----------
+        l : array_like
+            Squared distances.
+
+        Returns
+        -------
+        ndarray, shape like ``l``
 
         Examples
         --------
@@ -145,6 +163,15 @@ class AdhesionKernel:
 
     def d2A(self, l):
         """``A''(l) = A0 (2/(c s) + 1/s^2 - l/(c s^2)) exp(-l/s)``, ``s = l*^2, c = a^2 s``.
+
+        Parameters
+        ----------
+        l : array_like
+            Squared distances.
+
+        Returns
+        -------
+        ndarray, shape like ``l``
 
         Examples
         --------

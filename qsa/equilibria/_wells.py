@@ -17,17 +17,31 @@ __all__ = ["QuarticWell", "resolve_well", "is_quartic"]
 
 @dataclass(frozen=True)
 class QuarticWell:
-    """``W(k) = k^2 (k - kstar)^2 / 4``: the default double well (wells at 0, kstar)."""
+    """``W(k) = k^2 (k - kstar)^2 / 4``: the default double well (wells at 0, kstar).
+
+    Parameters
+    ----------
+    kstar : float
+
+    Examples
+    --------
+    >>> w = QuarticWell(5.0)
+    >>> float(w.W(1.0)), float(w.dW(1.0)), float(w.d2W(1.0))
+    (4.0, 6.0, 0.5)
+    """
 
     kstar: float
 
     def W(self, k):
+        """``W(k)``, shape like ``k``."""
         return 0.25 * k**2 * (k - self.kstar) ** 2
 
     def dW(self, k):
+        """``W'(k)``, shape like ``k``."""
         return 0.5 * k * (k - self.kstar) * (2 * k - self.kstar)
 
     def d2W(self, k):
+        """``W''(k)``, shape like ``k``."""
         return 0.5 * (6 * k**2 - 6 * k * self.kstar + self.kstar**2)
 
 
@@ -50,8 +64,25 @@ def _positive(x, name):
 
 
 def is_quartic(well, kstar) -> bool:
-    """True when ``well`` is (numerically) the default quartic with this ``kstar``."""
-    if isinstance(well, QuarticWell) or type(well).__name__ == "DoubleWell":
+    """True when ``well`` is (numerically) the default quartic with this ``kstar``.
+
+    Parameters
+    ----------
+    well : object
+    kstar : float
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> from qsa.energies import DoubleWell
+    >>> is_quartic(DoubleWell(5.0), 5.0), is_quartic(DoubleWell(5.0), 4.0)
+    (True, False)
+    """
+    if ((isinstance(well, QuarticWell) or type(well).__name__ == "DoubleWell")
+            and float(well.kstar) == float(kstar)):
         return True
     k = np.linspace(-0.3, 1.3, 17) * kstar
     try:
@@ -82,6 +113,17 @@ def resolve_well(well, kstar, *, default_kstar=5.0):
         Missing callables, inconsistent or missing ``kstar``, or wells that are
         not equal-depth minima at 0 and ``kstar`` (``W = W' = 0`` there,
         ``W'' > 0`` there and ``W > 0`` in between).
+
+    Returns
+    -------
+    well : object
+    kstar : float
+
+    Examples
+    --------
+    >>> well, kstar = resolve_well(None, None)
+    >>> type(well).__name__, kstar
+    ('DoubleWell', 5.0)
     """
     wk = getattr(well, "kstar", None) if well is not None else None
     if kstar is None:

@@ -61,6 +61,21 @@ class Fold:
         Its length.
     dp_ds : float
         The remaining ``dp/ds`` at the refined location (0 at an exact fold).
+
+    Parameters
+    ----------
+    Constructed by :func:`continuation`; the fields are the attributes above.
+
+    Examples
+    --------
+    >>> from qsa.energies import Faceting, Perimeter
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(0.77, 0.1, grid=17)
+    >>> b = continuation(lambda Ls: Faceting(0.1, 5.0) + Perimeter(5.0, Ls), eq.curve,
+    ...                  "L_star", (eq.params["L_star"], 3.0, -0.1))
+    >>> fold = b.folds[0]
+    >>> bool(abs(fold.dp_ds) < 1e-6), bool(3.0 < fold.param < eq.params["L_star"])
+    (True, True)
     """
 
     param: float
@@ -85,6 +100,21 @@ class BranchPoint:
         Sign of ``det F_x`` of the square system at this point.
     n_unstable : int or None
         Number of unstable eigenvalues if stability was requested.
+
+    Parameters
+    ----------
+    Constructed by :func:`continuation`; the fields are the attributes above.
+
+    Examples
+    --------
+    >>> from qsa.energies import Faceting, Perimeter
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17)
+    >>> b = continuation(lambda Ls: Faceting(0.1, 5.0) + Perimeter(5.0, Ls), eq.curve,
+    ...                  "L_star", (eq.params["L_star"], 6.0, 0.05), method="natural")
+    >>> pt = b.points[0]
+    >>> bool(pt.equilibrium.success), bool(pt.param == eq.params["L_star"])
+    (True, True)
     """
 
     param: float
@@ -95,6 +125,7 @@ class BranchPoint:
 
     @property
     def curve(self) -> Curve:
+        """``equilibrium.curve``."""
         return self.equilibrium.curve
 
 
@@ -119,6 +150,20 @@ class Branch:
         (corrector failures), 3 natural continuation stopped (fold or failure).
     message : str
     n_steps, n_rejected : int
+
+    Parameters
+    ----------
+    Constructed by :func:`continuation`; the fields are the attributes above.
+
+    Examples
+    --------
+    >>> from qsa.energies import Faceting, Perimeter
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17)
+    >>> b = continuation(lambda Ls: Faceting(0.1, 5.0) + Perimeter(5.0, Ls), eq.curve,
+    ...                  "L_star", (eq.params["L_star"], 6.0, 0.05), method="natural")
+    >>> bool(b.success), b.values.shape == b.lengths.shape == b.residuals.shape
+    (True, True)
     """
 
     param: str
@@ -150,6 +195,7 @@ class Branch:
 
     @property
     def n_unstable(self) -> np.ndarray | None:
+        """Unstable counts per point, shape (n_points,), or None without ``stability=True``."""
         if any(p.n_unstable is None for p in self.points):
             return None
         return np.array([p.n_unstable for p in self.points], dtype=int)
@@ -159,6 +205,7 @@ class Branch:
         return np.array([p.equilibrium.energy.energy(p.curve) for p in self.points])
 
     def summary(self) -> dict:
+        """JSON-serialisable summary (parameter values, lengths, residuals, folds ...)."""
         return {
             "param": self.param, "method": self.method, "success": bool(self.success),
             "status": int(self.status), "message": self.message,

@@ -71,6 +71,17 @@ class Heteroclinic:
         ``sigma -> +inf``; ``lambda = sqrt(W'') / alpha`` at the wells.
     closed_form : bool
         True for the quartic well (exact logistic formula).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> h = heteroclinic(0.1, kstar=5.0)
+    >>> float(np.round(h(0.0), 12)), h.closed_form  # centred at psi = kstar / 2
+    (2.5, True)
+    >>> bool(np.isclose(h.width, np.sqrt(2) * 0.1 / 5.0))
+    True
+    >>> bool(np.isclose(h.tension, 0.1 * 5.0**3 / (6 * np.sqrt(2))))
+    True
     """
 
     alpha: float
@@ -83,7 +94,13 @@ class Heteroclinic:
     # ------------------------------------------------------------ evaluation
     @property
     def decay_rate(self) -> float:
-        """The slower of the two tail rates, ``min(rates)``."""
+        """The slower of the two tail rates, ``min(rates)``.
+
+        Examples
+        --------
+        >>> round(float(heteroclinic(0.1, kstar=5.0).decay_rate), 8)  # kstar / (sqrt(2) alpha)
+        35.35533906
+        """
         return min(self.rates)
 
     @property
@@ -118,7 +135,23 @@ class Heteroclinic:
         return _logistic(self._x_of_sigma(sigma), self.kstar)[0]
 
     def complement(self, sigma):
-        """``kstar - psi_h(sigma)`` without cancellation (the upper tail); shape like sigma."""
+        """``kstar - psi_h(sigma)`` without cancellation (the upper tail); shape like sigma.
+
+        Parameters
+        ----------
+        sigma : array_like
+            Arc length from the front centre (``psi_h(0) = kstar / 2`` for symmetric wells).
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
+
+        Examples
+        --------
+        >>> h = heteroclinic(0.1, kstar=5.0)
+        >>> bool(h.complement(2.0) / (5.0 * np.exp(-2.0 * h.decay_rate)) > 0.99)
+        True
+        """
         return _logistic(self._x_of_sigma(sigma), self.kstar)[1]
 
     def derivative(self, sigma):
@@ -126,17 +159,66 @@ class Heteroclinic:
 
         Computed from the quadrature (not from the first integral), so it is an
         independent check of the ODE.
+
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> h = heteroclinic(0.1, kstar=5.0)
+        >>> s = np.linspace(-0.2, 0.2, 5)
+        >>> bool(np.allclose(h.derivative(s), h(s) * h.complement(s) / (np.sqrt(2) * 0.1)))
+        True
         """
         x = self._x_of_sigma(sigma)
         psi, z = _logistic(x, self.kstar)
         return psi * z / (self.kstar * self._G(x))
 
     def second_derivative(self, sigma):
-        """``psi_h''(sigma) = W'(psi_h) / alpha^2`` (from the ODE itself)."""
+        """``psi_h''(sigma) = W'(psi_h) / alpha^2`` (from the ODE itself).
+
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> h, d = heteroclinic(0.1, kstar=5.0), 1e-5
+        >>> fd = (h.derivative(0.03 + d) - h.derivative(0.03 - d)) / (2 * d)
+        >>> bool(np.isclose(fd, h.second_derivative(0.03), rtol=1e-6))
+        True
+        """
         return self.well.dW(self(sigma)) / self.alpha**2
 
     def position(self, psi):
-        """Arc length ``sigma`` where ``psi_h(sigma) = psi``, for ``0 < psi < kstar``."""
+        """Arc length ``sigma`` where ``psi_h(sigma) = psi``, for ``0 < psi < kstar``.
+
+        Parameters
+        ----------
+        psi : float or array_like
+            Values in ``(0, kstar)``.
+
+        Returns
+        -------
+        float or ndarray, shape like ``psi``
+
+        Examples
+        --------
+        >>> h = heteroclinic(0.1, kstar=5.0)
+        >>> round(float(h(h.position(1.0))), 10)
+        1.0
+        """
         psi = np.asarray(psi, dtype=float)
         if np.any((psi <= 0) | (psi >= self.kstar)):
             raise ValueError("psi must lie strictly between the wells 0 and kstar")
@@ -148,6 +230,11 @@ class Heteroclinic:
         """Front energy ``int (alpha^2/2 psi'^2 + W) dsigma = int_0^kstar alpha sqrt(2W) dpsi``.
 
         ``alpha kstar^3 / (6 sqrt 2)`` for the quartic.
+
+        Examples
+        --------
+        >>> round(float(heteroclinic(0.1, kstar=5.0).tension), 8)  # alpha kstar^3 / (6 sqrt 2)
+        1.47313913
         """
         if self.closed_form:
             return self.alpha * self.kstar**3 / (6 * np.sqrt(2))

@@ -94,6 +94,18 @@ class PolishResult(Equilibrium):
         Final unfolding parameters ``a`` (zero up to round-off at a true equilibrium).
     noise_floor : float
         Estimated round-off level of the relative residual on this grid.
+
+    Parameters
+    ----------
+    Constructed by :func:`polish`; the fields are the attributes above.
+
+    Examples
+    --------
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> res = polish(eq.energy, eq.curve)
+    >>> bool(res.success), res.status, res.n_iter <= 2
+    (True, 0, True)
     """
 
     status: int = 0
@@ -103,6 +115,7 @@ class PolishResult(Equilibrium):
     noise_floor: float = 0.0
 
     def summary(self) -> dict:
+        """The :meth:`Equilibrium.summary` plus the Newton record (status, n_iter, history)."""
         out = super().summary()
         out.update(status=int(self.status), n_iter=int(self.n_iter),
                    history=[float(h) for h in self.history],
@@ -205,6 +218,24 @@ def normal_velocity(energy, c: Curve) -> np.ndarray:
     Terms that use the generic formula ``V^n = (Delta_s + kappa^2) mu - kappa xi``
     are evaluated with ``Delta_s`` applied matrix-free (O(N^2) instead of O(N^3)
     on Fourier grids); other terms call their own ``normal_velocity``.
+
+    Parameters
+    ----------
+    energy : Energy
+    c : Curve
+
+    Returns
+    -------
+    ndarray, shape (N,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(0.8, 0.1, kstar=5.0)
+    >>> V = normal_velocity(eq.energy, eq.curve)
+    >>> bool(np.allclose(V, eq.energy.normal_velocity(eq.curve))), bool(np.abs(V).max() < 1e-8)
+    (True, True)
     """
     from qsa.energies.base import Energy, Perimeter
 
@@ -236,6 +267,22 @@ def residual_scale(energy, curve: Curve) -> float:
     ``Delta_s W'(kappa)``, ``kappa^2 mu`` and ``kappa g d_g E`` (as for
     :func:`qsa.equilibria.npulse.faceting_residual`). ``max|V^n| / residual_scale``
     is the relative residual.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> round(residual_scale(eq.energy, eq.curve), 10)  # kappa^2 mu = W'(1) = 6
+    6.0
     """
     N = curve.N
     scale = 0.0
@@ -254,6 +301,25 @@ def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
     (MATH.md section 4). For circles ``Psi_1, Psi_2`` are not independent of
     ``Psi_3`` on a translation-invariant curve only if degenerate; a pseudo-inverse
     of the Gram matrix is used.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+    gradient : ndarray, shape (2N,), optional
+        ``nabla_I E`` in ``<f, h> = int f h dsigma`` if already computed.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> (np.round(multipliers(eq.energy, eq.curve), 8) + 0.0).tolist()  # (0, 0, W'(1/R))
+    [0.0, 0.0, 6.0]
     """
     from qsa.geometry import constraint_gradients
 
@@ -296,6 +362,17 @@ class EquilibriumSystem:
     reference : Curve
         Initial guess with constant ``g``: supplies the grid, ``theta0``, ``gamma(0)``,
         the phase reference and the unfolding fields ``phi_j``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> system = EquilibriumSystem(eq.energy, eq.curve)
+    >>> x = system.pack(eq.curve)  # [kappa, L, a, ...]: 33 + 3 unknowns
+    >>> F = system.residual(x)
+    >>> x.size, bool(np.abs(F).max() < 1e-10), system.jacobian(x).shape == (36, 36)
+    (36, True, True)
     """
 
     def __init__(self, energy, reference: Curve):
@@ -325,14 +402,28 @@ class EquilibriumSystem:
 
     # state <-> curve
     def pack(self, curve: Curve) -> np.ndarray:
+        """Unknowns ``x = [kappa (N,), L, a (n_unfold,)]`` of a constant-g curve, ``a = 0``."""
         return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold)])
 
     def curve(self, x) -> Curve:
+        """The :class:`~qsa.curve.Curve` of unknowns ``x`` (``g = L``, reference base point)."""
         N = self.N
         return Curve(x[:N], x[N], self.grid, self.ref.theta0, self.ref.origin)
 
     def residual(self, x, energy=None) -> np.ndarray:
-        """``F(x)``, shape (size,): ``[V^n + a.phi, C, phase]``."""
+        """``F(x)``, shape (size,): ``[V^n + a.phi, C, phase]``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (size,)
+            Unknowns (:meth:`pack`).
+        energy : Energy, optional
+            Another energy on the same system (default the system's).
+
+        Returns
+        -------
+        ndarray, shape (size,)
+        """
         energy = self.energy if energy is None else energy
         N = self.N
         c = self.curve(x)
@@ -344,7 +435,21 @@ class EquilibriumSystem:
         return np.concatenate(parts)
 
     def scaled_parts(self, F, c: Curve, scale: float) -> np.ndarray:
-        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,)."""
+        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,).
+
+        Parameters
+        ----------
+        F : ndarray, shape (size,)
+            :meth:`residual`.
+        c : Curve
+            :meth:`curve` of the same ``x``.
+        scale : float
+            :func:`residual_scale` at ``c``.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+        """
         N = self.N
         out = np.zeros(3)
         out[0] = np.max(np.abs(F[:N])) / scale
@@ -354,7 +459,17 @@ class EquilibriumSystem:
         return out
 
     def merit(self, F, c: Curve, scale: float) -> float:
-        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows)."""
+        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows).
+
+        Parameters
+        ----------
+        F, c, scale
+            As in :meth:`scaled_parts`.
+
+        Returns
+        -------
+        float
+        """
         N = self.N
         m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
         if self.phase is not None:
@@ -362,7 +477,17 @@ class EquilibriumSystem:
         return float(np.sqrt(m))
 
     def scaled_norm(self, F, c: Curve, scale: float) -> float:
-        """``max`` of :meth:`scaled_parts`: the relative residual of the square system."""
+        """``max`` of :meth:`scaled_parts`: the relative residual of the square system.
+
+        Parameters
+        ----------
+        F, c, scale
+            As in :meth:`scaled_parts`.
+
+        Returns
+        -------
+        float
+        """
         return float(np.max(self.scaled_parts(F, c, scale)))
 
     def jacobian_parts(self, x, energy=None):
@@ -424,7 +549,18 @@ class EquilibriumSystem:
         return A, B, Crows, D, low
 
     def jacobian(self, x, energy=None):
-        """Assembled ``dF/dx``, shape (size, size): sparse CSC for FD, dense for Fourier."""
+        """Assembled ``dF/dx``, shape (size, size): sparse CSC for FD, dense for Fourier.
+
+        Parameters
+        ----------
+        x : ndarray, shape (size,)
+        energy : Energy, optional
+
+        Returns
+        -------
+        sparse CSC matrix or ndarray, shape (size, size)
+            Euclidean derivative ``dF/dx`` (no inner-product weights).
+        """
         A, B, Crows, D, low = self.jacobian_parts(x, energy)
         return _assemble(A, B, Crows, D, low)
 

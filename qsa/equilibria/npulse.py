@@ -75,6 +75,14 @@ def resolving_size(kappa_of_s, tol=1e-14, max_size=20001):
     -------
     int
         Odd ``N`` with all Fourier modes ``|k| > (N-1)/2`` below the tolerance.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> resolving_size(lambda s: np.cos(2 * np.pi * 3 * s))  # mode 3: floor of 9 nodes
+    9
+    >>> resolving_size(lambda s: np.exp(np.cos(2 * np.pi * s))) < 51
+    True
     """
     M = 1025
     while True:
@@ -97,6 +105,30 @@ def faceting_residual(energy, curve, alpha, well):
     ``V^n = Delta_s mu + kappa^2 mu - kappa g d_g E`` with
     ``mu = -alpha^2 Delta_s kappa + W'(kappa)`` (e:Facet-NV); the single terms are
     ``alpha^2 Delta_s^2 kappa``, ``Delta_s W'(kappa)``, ``kappa^2 mu`` and ``kappa g d_g E``.
+
+    Parameters
+    ----------
+    energy : Energy
+        ``Faceting`` (+ ``Perimeter``) with the given ``alpha`` and ``well``.
+    curve : Curve
+    alpha : float
+    well : object
+        The double well (``dW`` is used).
+
+    Returns
+    -------
+    residual : float
+        ``max |V^n|``.
+    scale : float
+        The largest single term; ``residual / scale`` is the relative residual.
+
+    Examples
+    --------
+    >>> from qsa.energies import DoubleWell
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> res, scale = faceting_residual(eq.energy, eq.curve, 0.1, DoubleWell(5.0))
+    >>> bool(res < 1e-10 * scale), round(scale, 6)
+    (True, 6.0)
     """
     Vn = np.asarray(energy.normal_velocity(curve))
     N = curve.N
@@ -232,6 +264,20 @@ def circle(R, alpha, grid=None, beta=5.0, well=None, kstar=None):
         ``> 0``.
     grid : Grid, int or None
         As in :func:`npulse` (``None``: ``Fourier(33)``).
+
+    Returns
+    -------
+    Equilibrium
+        ``kind="circle"``, ``params`` with ``R, alpha, beta, kstar, L, L_star``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> bool(eq.success), eq.multipliers.tolist()  # Lambda_3 = W'(1) = 6
+    (True, [0.0, 0.0, 6.0])
+    >>> round(eq.params["L_star"], 10) == round(2 * np.pi - (6.0 - 4.0) / 5.0, 10)
+    True
     """
     from qsa.curve import Curve
     from qsa.energies import Faceting, Perimeter

@@ -202,6 +202,19 @@ class PeriodicOrbit:
     depth : float
         ``min(a - s_lo, s_hi - b)``: distance of the plateaus from the wells of P
         (exponentially small near the separatrix).
+
+    Parameters
+    ----------
+    Constructed by :func:`periodic_orbit` (not directly).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> orb = periodic_orbit(0.1, nu2=-1.0, kstar=5.0)
+    >>> bool(orb.a < 2.5 < orb.b), bool(np.isclose(orb(0.0), orb.a))
+    (True, True)
+    >>> bool(np.isclose(orb(orb.period / 2), orb.b)), bool(np.isclose(orb(orb.period), orb.a))
+    (True, True)
     """
 
     alpha: float
@@ -262,7 +275,24 @@ class PeriodicOrbit:
         return np.where(v <= 0, self.a + xa, self.b - xb)
 
     def derivative(self, sigma):
-        """``psi'(sigma) = (dpsi/dv) / (dsigma/dv)``, from the quadrature; shape like sigma."""
+        """``psi'(sigma) = (dpsi/dv) / (dsigma/dv)``, from the quadrature; shape like sigma.
+
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        ndarray, shape like ``sigma``
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> orb, d = periodic_orbit(0.1, nu2=-1.0, kstar=5.0), 1e-6
+        >>> fd = (orb(0.1 + d) - orb(0.1 - d)) / (2 * d)
+        >>> bool(np.isclose(orb.derivative(0.1), fd, rtol=1e-6))
+        True
+        """
         v, rising = self._split(sigma)
         h = 0.5 * (self.b - self.a)
         slope = h / (np.cosh(v) ** 2 * self._t["F"](v))
@@ -400,6 +430,25 @@ def periodic_range(nu1=0.0, well=None, kstar=None):
     ------
     ValueError
         If ``nu1`` is so large that ``P`` has no maximum between two minima.
+
+    Parameters
+    ----------
+    nu1 : float
+        Multiplier of the total-curvature constraint.
+    well : object, optional
+        Double well (default quartic).
+    kstar : float, optional
+
+    Returns
+    -------
+    nu2_c, nu2_sep : float
+        Centre (small oscillations) and separatrix values.
+
+    Examples
+    --------
+    >>> lo, hi = periodic_range(kstar=4.0)
+    >>> round(lo, 12), round(hi, 12)  # (-kstar^4 / 64, 0)
+    (-4.0, 0.0)
     """
     well, kstar = resolve_well(well, kstar)
     fam = _family(well, kstar, _finite(nu1, "nu1"))

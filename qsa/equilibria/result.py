@@ -39,6 +39,21 @@ class Equilibrium:
     success : bool
         Whether the construction met its tolerances.
     message : str
+
+    Parameters
+    ----------
+    Constructed by :func:`~qsa.equilibria.npulse`, :func:`~qsa.equilibria.circle`,
+    :func:`~qsa.equilibria.splice` and :func:`~qsa.equilibria.polish`; the fields
+    are the attributes above.
+
+    Examples
+    --------
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, kstar=5.0)
+    >>> eq.kind, bool(eq.success), bool(eq.relative_residual < 1e-10)
+    ('circle', True, True)
+    >>> {"kind", "success", "residual", "params"} <= set(eq.summary())
+    True
     """
 
     curve: object
@@ -55,11 +70,22 @@ class Equilibrium:
 
     @property
     def relative_residual(self) -> float:
-        """``residual / residual_scale``."""
+        """``residual / residual_scale``.
+
+        Returns
+        -------
+        float
+        """
         return self.residual / self.residual_scale
 
     def summary(self) -> dict:
-        """JSON-serialisable summary (no arrays)."""
+        """JSON-serialisable summary (no arrays).
+
+        Returns
+        -------
+        dict
+            Kind, success, message, residuals, params and multipliers.
+        """
         p = {k: (float(v) if isinstance(v, (float, np.floating)) else v)
              for k, v in self.params.items()}
         return {
@@ -76,4 +102,5 @@ class Equilibrium:
         }
 
     def to_json(self) -> str:
+        """:meth:`summary` as an indented JSON string."""
         return json.dumps(self.summary(), indent=2)

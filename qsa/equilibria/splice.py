@@ -73,6 +73,16 @@ class SpliceProfile:
         Total length L.
     cutoff : (float, float)
         ``(l1, l2)``, fixed arc lengths of the cutoff, ``0 < l1 < l2``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import heteroclinic
+    >>> p, L = polygon_positions(np.radians([120, 120, 120]), [1.0, 1.0, 1.0], 5.0)
+    >>> prof = SpliceProfile(heteroclinic(0.2, kstar=5.0), p, L, default_cutoff(p, L))
+    >>> R_kappa, R_g = prof.residuals(np.linspace(0, L, 7))
+    >>> R_kappa.shape, bool(abs(R_kappa[0]) < 1e-4)  # small mid-facet, O(1e-1) at corners
+    ((7,), True)
     """
 
     def __init__(self, front, positions, length, cutoff):
@@ -84,7 +94,17 @@ class SpliceProfile:
         self.a = 0.5 * (self.p[1::2] - self.p[0::2])
 
     def cut_front(self, x):
-        """``psi~, psi~', psi~''`` at local coordinates x (any shape)."""
+        """``psi~, psi~', psi~''`` at local coordinates x (any shape).
+
+        Parameters
+        ----------
+        x : array_like
+            Local coordinate (distance from the front).
+
+        Returns
+        -------
+        psi, dpsi, d2psi : ndarray, shape like ``x``
+        """
         f = self.front
         k = f.kstar
         r = np.abs(x)
@@ -104,7 +124,17 @@ class SpliceProfile:
         return v0, v1, v2
 
     def local(self, sigma):
-        """Wrapped coordinates ``y_i = sigma - c_i`` in [-L/2, L/2), shape (..., N)."""
+        """Wrapped coordinates ``y_i = sigma - c_i`` in [-L/2, L/2), shape (..., N).
+
+        Parameters
+        ----------
+        sigma : array_like
+            Arc lengths.
+
+        Returns
+        -------
+        ndarray, shape ``sigma.shape + (N,)``
+        """
         y = np.asarray(sigma, dtype=float)[..., None] - self.c
         return (y + 0.5 * self.L) % self.L - 0.5 * self.L
 
@@ -117,7 +147,16 @@ class SpliceProfile:
         return tuple(out) if derivatives else out[0]
 
     def position_derivatives(self, sigma):
-        """``d psi_N / d p_j`` at sigma, shape (..., 2N)."""
+        """``d psi_N / d p_j`` at sigma, shape (..., 2N).
+
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        ndarray, shape ``sigma.shape + (2N,)``
+        """
         y = self.local(sigma)
         up = self.cut_front(y + self.a)[1]
         dn = self.cut_front(y - self.a)[1]
@@ -127,7 +166,16 @@ class SpliceProfile:
         return out
 
     def residuals(self, sigma):
-        """``(R_kappa, R_g)`` at sigma (the perimeter term balanced, ``L* = L``)."""
+        """``(R_kappa, R_g)`` at sigma (the perimeter term balanced, ``L* = L``).
+
+        Parameters
+        ----------
+        sigma : array_like
+
+        Returns
+        -------
+        R_kappa, R_g : ndarray, shape like ``sigma``
+        """
         psi, d1, d2 = self(sigma, derivatives=True)
         W = self.front.well
         al = self.front.alpha
@@ -245,6 +293,26 @@ def default_cutoff(positions, length):
     """The default fixed cutoff ``(l1, l2)`` of :func:`splice` for these positions.
 
     ``l2 = 0.75 (L/2 - max a_i)`` (``a_i`` the corner half-lengths), ``l1 = l2 / 2``.
+
+    Parameters
+    ----------
+    positions : array_like, shape (2N,)
+        Front positions (see :func:`splice`).
+    length : float
+        Total length L.
+
+    Returns
+    -------
+    (float, float)
+        ``(l1, l2)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p, L = polygon_positions(np.radians([120, 120, 120]), [1.0, 1.0, 1.0], 5.0)
+    >>> l1, l2 = default_cutoff(p, L)
+    >>> bool(np.isclose(l2, 0.75 * (L / 2 - np.pi / 15))), bool(l1 == l2 / 2)
+    (True, True)
     """
     p = np.asarray(positions, dtype=float)
     l2 = 0.75 * (0.5 * float(length) - 0.5 * np.max(p[1::2] - p[0::2]))
@@ -269,6 +337,16 @@ def splice_closure(profile, grid=None, jacobian=True):
         (e:C1, e:C2), ``theta(0) = 0``.
     J : ndarray, shape (3, 2N) or None
         ``dC/dp``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import heteroclinic
+    >>> p, L = polygon_positions(np.radians([120, 120, 120]), [1.0, 1.0, 1.0], 5.0)
+    >>> prof = SpliceProfile(heteroclinic(0.2, kstar=5.0), p, L, default_cutoff(p, L))
+    >>> C, J = splice_closure(prof)  # symmetric triangle: closed by symmetry
+    >>> bool(np.linalg.norm(C) < 1e-12), J.shape
+    (True, (3, 6))
     """
     fine = _fine_grid(profile.front, profile.L) if grid is None else grid
     return _closure_and_jacobian(profile, fine, want_jac=jacobian)
@@ -298,6 +376,16 @@ def close_positions(positions, front, length, cutoff, tol=1e-12, max_iter=30):
     ------
     ValueError
         Bad positions or cutoff, or a solve that makes fronts cross.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import heteroclinic
+    >>> p, L = polygon_positions(np.radians([90, 90, 90, 90]), [1.0, 1.2, 1.0, 1.2], 5.0)
+    >>> front = heteroclinic(0.2, kstar=5.0)
+    >>> q, history, J = close_positions(p, front, L, default_cutoff(p, L))
+    >>> bool(history[-1] < 1e-12), q.shape, J.shape
+    (True, (8,), (3, 8))
     """
     L = _positive(length, "length")
     p, cut = _check_positions(positions, L, cutoff, front)
@@ -361,6 +449,14 @@ def splice(positions, alpha, well=None, grid=None, length=None, kstar=None, beta
     ------
     ValueError
         Bad positions, length, cutoff or alpha.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p, L = polygon_positions(np.radians([120, 120, 120]), [1.0, 1.0, 1.0], 5.0)
+    >>> eq = splice(p, 0.2, kstar=5.0, length=L)
+    >>> eq.kind, bool(eq.success), bool(eq.closure < 1e-12), eq.params["n_corners"]
+    ('splice', True, True, 3)
     """
     from qsa.curve import Curve
     from qsa.energies import Faceting, Perimeter
@@ -422,6 +518,24 @@ def polygon_positions(angles, facets, kstar):
     ValueError
         Angles not positive or not summing to 2 pi, facets not positive, or the
         sharp polygon far from closing (its closure defect is reported).
+
+    Parameters
+    ----------
+    angles : array_like, shape (N,)
+        Exterior corner angles, positive, summing to ``2 pi``.
+    facets : array_like, shape (N,)
+        Facet lengths, positive.
+    kstar : float
+        Curvature of the corner arcs.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p, L = polygon_positions(np.radians([120, 120, 120]), [1.0, 1.0, 1.0], 5.0)
+    >>> p.shape, bool(np.isclose(L, 3.0 + 2 * np.pi / 5.0))
+    ((6,), True)
+    >>> np.round(np.diff(p), 10).tolist()  # arc, facet, arc, facet, arc
+    [0.4188790205, 1.0, 0.4188790205, 1.0, 0.4188790205]
     """
     ang = np.asarray(angles, dtype=float)
     fac = np.asarray(facets, dtype=float)
@@ -482,6 +596,20 @@ def splice_polygon(angles, facets, alpha, well=None, grid=None, kstar=None, tol=
         Invalid polygon data (see :func:`polygon_positions`), or a polygon that cannot
         close with these angles and facets longer than two front widths (e.g. two
         corners that are not both ``pi``).
+
+    Returns
+    -------
+    Equilibrium
+        As :func:`splice` (a quasi-equilibrium: ``residual`` exponentially small in
+        ``kstar d_min / alpha``), with ``params["angles"]``, ``params["facets"]`` (the
+        closing facet lengths) and ``params["d_min"]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> eq = splice_polygon(np.radians([120, 120, 120]), [1.0, 1.3, 1.0], 0.2, kstar=5.0)
+    >>> bool(eq.success), bool(eq.closure < 1e-12), round(eq.params["d_min"], 6)
+    (True, True, 0.418879)
     """
     well, kstar = resolve_well(well, kstar)
     alpha = _positive(alpha, "alpha")

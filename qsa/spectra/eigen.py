@@ -68,7 +68,20 @@ _EPS = np.finfo(float).eps
 
 
 class NotEquilibriumWarning(UserWarning):
-    """The analysed curve is not (close to) an equilibrium: the spectrum is not a linearization."""
+    """The analysed curve is not (close to) an equilibrium: the spectrum is not a linearization.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from qsa import Curve, Fourier
+    >>> from qsa.energies import Faceting, Perimeter
+    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(33))
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     s = spectrum(Faceting(0.1, 5.0) + Perimeter(5.0, 6.0), c)
+    >>> any(issubclass(x.category, NotEquilibriumWarning) for x in w), s.status
+    (True, 1)
+    """
 
 
 # ------------------------------------------------------------------------ results
@@ -112,6 +125,19 @@ class KernelReport:
     projection_residual, relative_projection_residual, relative_residual : float
         See :class:`~qsa.spectra.hessian.LagrangeHessian`.
     notes : tuple of str
+
+    Parameters
+    ----------
+    Constructed by :func:`kernel_report` (and :func:`spectrum`); the fields are the
+    attributes above.
+
+    Examples
+    --------
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> kr = kernel_report(eq.energy, eq.curve)
+    >>> kr.kernel_dimension, kr.expected_kernel_dimension, bool(kr.relative_residual < 1e-10)
+    (2, 2, True)
     """
 
     lagrange_kernel: float
@@ -131,7 +157,12 @@ class KernelReport:
     notes: tuple = ()
 
     def summary(self) -> dict:
-        """JSON-serialisable dict."""
+        """JSON-serialisable dict.
+
+        Returns
+        -------
+        dict
+        """
         out = {}
         for k, v in self.__dict__.items():
             if isinstance(v, np.ndarray):
@@ -204,6 +235,21 @@ class Spectrum:
     status : int
         0 ok, 1 not an equilibrium (warning issued), 2 eigen-solver failure.
     message : str
+
+    Parameters
+    ----------
+    Constructed by :func:`spectrum`; the fields are the attributes above.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> s = spectrum(eq.energy, eq.curve)
+    >>> s.n_unstable, s.n_kernel, np.round(s.eigenvalues[2:4], 6).tolist()
+    (0, 2, [-4.86, -4.86])
+    >>> s.unstable.size, s.summary()["n_eigenvalues"]
+    (0, 17)
     """
 
     eigenvalues: np.ndarray
@@ -240,11 +286,26 @@ class Spectrum:
 
     @property
     def unstable(self) -> np.ndarray:
-        """The eigenvalues counted by ``n_unstable``."""
+        """The eigenvalues counted by ``n_unstable``.
+
+        Returns
+        -------
+        ndarray, shape (n_unstable,)
+        """
         return self.eigenvalues[np.real(self.eigenvalues) > self.kernel_tol]
 
     def summary(self, max_eigenvalues=20) -> dict:
-        """JSON-serialisable dict (the ``max_eigenvalues`` largest eigenvalues)."""
+        """JSON-serialisable dict (the ``max_eigenvalues`` largest eigenvalues).
+
+        Parameters
+        ----------
+        max_eigenvalues : int
+            How many eigenvalues to include.
+
+        Returns
+        -------
+        dict
+        """
         ev = self.eigenvalues[:max_eigenvalues]
 
         def num(x):
@@ -280,6 +341,28 @@ def operator_norm(curve: Curve, A, iters=30, seed=0) -> float:
 
     ``A`` acts on nodal (N,) or stacked (2N,) vectors; the estimate is a lower
     bound, accurate to a few digits after ``iters`` iterations.
+
+    Parameters
+    ----------
+    curve : Curve
+        Supplies the ``<f, h> = int f h dsigma`` weights.
+    A : matrix, shape (N, N) or (2N, 2N)
+    iters : int
+    seed : int
+        Seed of the random start vector.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> est = operator_norm(c, np.diag(np.linspace(1.0, 3.0, 17)))  # exact norm: 3
+    >>> bool(2.99 < est <= 3.0 + 1e-12)
+    True
     """
     n = A.shape[0]
     w = curve.dsigma if n == curve.N else np.concatenate([curve.dsigma] * (n // curve.N))
@@ -490,7 +573,24 @@ def _shift_invert(A, k, sigma, symmetric):
 
 
 def second_resolution(grid, factor=1.5):
-    """The grid of about ``factor`` times the resolution (odd N for Fourier)."""
+    """The grid of about ``factor`` times the resolution (odd N for Fourier).
+
+    Parameters
+    ----------
+    grid : Grid
+    factor : float
+
+    Returns
+    -------
+    Grid
+        Same kind, about ``factor * grid.N`` nodes.
+
+    Examples
+    --------
+    >>> from qsa import Fourier
+    >>> second_resolution(Fourier(17))
+    Fourier(27)
+    """
     N2 = int(round(factor * grid.N))
     if isinstance(grid, Fourier):
         N2 += 1 - N2 % 2
@@ -573,6 +673,27 @@ def small_cluster(eigenvalues, n_kernel=0, floor=0.0, max_size=None):
     ``|lambda|`` sorted increasingly and floored at ``floor``; ``m`` maximises
     ``|lambda|_(m) / |lambda|_(m-1)`` over ``max(n_kernel, 1) <= m <= max_size``
     (default: half the number of eigenvalues). See :class:`Spectrum` ``n_small``.
+
+    Parameters
+    ----------
+    eigenvalues : array_like, shape (n,)
+    n_kernel : int
+        Lower bound of the cluster size.
+    floor : float
+        Round-off level: smaller ``|lambda|`` count as ``floor``.
+    max_size : int, optional
+
+    Returns
+    -------
+    m : int
+    ratio : float
+        ``|lambda|_(m) / |lambda|_(m-1)``.
+
+    Examples
+    --------
+    >>> m, ratio = small_cluster([-1e-6, 2e-6, -3e-6, -1.0, -2.0, -5.0], floor=1e-12)
+    >>> m, round(ratio)
+    (3, 333333)
     """
     a = np.sort(np.abs(np.asarray(eigenvalues)))
     if a.size < 2:

@@ -41,7 +41,30 @@ DENSE_CONSTRAINT_LIMIT = 1200
 
 
 def check_input(energy, curve):
-    """Raise ``ValueError`` naming the argument unless ``energy``/``curve`` are usable."""
+    """Raise ``ValueError`` naming the argument unless ``energy``/``curve`` are usable.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ValueError
+        ``energy`` not a qsa Energy or ``curve`` not a Curve.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> check_input("not an energy", Curve.circle(1.0, Fourier(9)))
+    Traceback (most recent call last):
+    ...
+    ValueError: energy must be a qsa Energy (e.g. Faceting(...) + Perimeter(...)), got str
+    """
     if not isinstance(energy, Energy):
         raise ValueError(f"energy must be a qsa Energy (e.g. Faceting(...) + Perimeter(...)), "
                          f"got {type(energy).__name__}")
@@ -50,7 +73,27 @@ def check_input(energy, curve):
 
 
 def inner_norm(curve: Curve, f) -> float:
-    """``sqrt(<f, f>)`` for a nodal (N,) or stacked (2N,) vector, ``<.,.> = int . dsigma``."""
+    """``sqrt(<f, f>)`` for a nodal (N,) or stacked (2N,) vector, ``<.,.> = int . dsigma``.
+
+    Parameters
+    ----------
+    curve : Curve
+    f : ndarray, shape (N,) or (2N,)
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> round(inner_norm(c, np.ones(17)) ** 2 / np.pi, 12)  # int 1 dsigma = 2 pi
+    2.0
+    >>> round(inner_norm(c, np.ones(34)) ** 2 / np.pi, 12)
+    4.0
+    """
     f = np.asarray(f, dtype=float)
     w = curve.dsigma
     if f.shape[0] == 2 * curve.N:
@@ -72,6 +115,16 @@ def hessian(energy, curve: Curve):
         ``energy.hessian(curve)``: dense for Fourier grids, sparse or
         :class:`~qsa.linalg.SparsePlusLowRank` (perimeter penalty) for finite
         differences. dsigma-self-adjoint.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> H = hessian(eq.energy, eq.curve)
+    >>> A = np.concatenate([eq.curve.dsigma] * 2)[:, None] * H  # W H is symmetric
+    >>> H.shape, bool(np.allclose(A, A.T))
+    ((34, 34), True)
     """
     check_input(energy, curve)
     return energy.hessian(curve)
@@ -104,6 +157,19 @@ class LagrangeHessian:
     constraints_included : tuple of bool, shape (3,)
         Which ``Lambda_j nabla^2 C_j`` terms are in ``matrix``.
     message : str
+
+    Parameters
+    ----------
+    Constructed by :func:`lagrange_hessian`; the fields are the attributes above.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> LH = lagrange_hessian(eq.energy, eq.curve)
+    >>> (np.round(LH.multipliers, 8) + 0.0).tolist(), bool(LH.relative_projection_residual < 1e-12)
+    ([0.0, 0.0, 6.0], True)
     """
 
     matrix: object

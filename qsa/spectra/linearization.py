@@ -91,6 +91,19 @@ def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None):
     matrix, shape (N, N)
         Dense for Fourier grids; sparse or :class:`~qsa.linalg.SparsePlusLowRank`
         for finite differences. ``J`` is self-adjoint in ``<f, h> = int f h dsigma``.
+
+    Examples
+    --------
+    The faceting circle (MATH.md section 4): ``lambda_0 = -W''(1) - 2 pi beta``,
+    ``lambda_2 = -9 (4 alpha^2 + W''(1))`` (double), ``lambda_1 = 0`` (translations):
+
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> J = normal_operator(eq.energy, eq.curve)
+    >>> ev = np.sort(np.linalg.eigvals(J).real)[::-1]
+    >>> np.round(ev[:5], 6).tolist() == [0.0, 0.0, -4.86, -4.86, round(-0.5 - 10 * np.pi, 6)]
+    True
     """
     check_input(energy, curve)
     LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
@@ -110,7 +123,29 @@ def _normal_core(curve, L):
 
 
 def symmetric_form(curve: Curve, J):
-    """``(S + S^T) / 2`` with ``S = W^{1/2} J W^{-1/2}``, ``W = diag(dsigma)``, shape (N, N)."""
+    """``(S + S^T) / 2`` with ``S = W^{1/2} J W^{-1/2}``, ``W = diag(dsigma)``, shape (N, N).
+
+    Parameters
+    ----------
+    curve : Curve
+        Supplies ``W = diag(dsigma)``.
+    J : matrix, shape (N, N)
+        Self-adjoint in ``<f, h> = int f h dsigma``.
+
+    Returns
+    -------
+    matrix, shape (N, N)
+        Symmetric in the Euclidean inner product, with the eigenvalues of ``J``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> S = symmetric_form(eq.curve, normal_operator(eq.energy, eq.curve))
+    >>> bool(np.allclose(S, S.T)), round(float(np.linalg.eigvalsh(S).max()), 6) + 0.0
+    (True, 0.0)
+    """
     rw = np.sqrt(curve.dsigma)
     return _symmetrize(_scale_rows_cols(J, rw, 1.0 / rw))
 
@@ -129,6 +164,29 @@ def scaled_operator(energy, curve: Curve, lagrange=None) -> np.ndarray:
     ValueError
         If ``curve.g`` is not constant (reparameterize first, e.g. with
         :func:`qsa.equilibria.polish`).
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+        With constant ``g``.
+    lagrange : LagrangeHessian, optional
+        A precomputed :func:`~qsa.spectra.lagrange_hessian` of this curve.
+
+    Returns
+    -------
+    ndarray, shape (N + 1, N + 1)
+        Acts on ``(kappa1, g1)``; self-adjoint in the weights ``(dsigma, L)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> K = scaled_operator(eq.energy, eq.curve)
+    >>> ev = np.sort(np.linalg.eigvals(K).real)[::-1]
+    >>> K.shape, np.round(ev[3:5], 6).tolist()  # 3 kernel modes, then J's spectrum
+    ((18, 18), [-4.86, -4.86])
     """
     check_input(energy, curve)
     g = curve.g
