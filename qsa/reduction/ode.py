@@ -114,7 +114,8 @@ collision time converges like ``N^-2`` and was extrapolated from N = 600, 1200,
 part of it is the perimeter mode (the difference is 4.3%, 3.3%, 2.5%, 2.5% for
 beta = 0.5, 5, 50, 500) and is captured by the variable-length reduction
 (``FrontODE(beta=...)``: 2.0%, 2.3%, 2.4%, 2.5%; triangle +0.33% against the
-extrapolated DAE), the rest (~2.5%) is not removed by a stiffer perimeter
+extrapolated DAE and 0.06% against N = 2400, positions within 0.08% of the
+smallest facet up to 0.99 ``t_c``), the rest (~2.5%) is not removed by a stiffer perimeter
 and does not depend on alpha at fixed ``lambda d`` (3.34% at alpha = 0.05 with
 the short facet halved, 3.35% at alpha = 0.1): it is not an O(alpha)
 correction. The splice's own ``V^n`` is 100x larger than its tangential part
