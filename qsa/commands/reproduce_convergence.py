@@ -77,7 +77,7 @@ def run_study(Ns, tol=1e-4, t_final=0.2, force_normal="centred", method="be", ve
     for N in sorted(Ns):
         t0 = time.perf_counter()
         res = solve_flow(model, initial, t_final, N=N, tol=tol, method=method,
-                         t_eval=[t_final], progress=False)
+                         t_eval=[t_final], progress=False, newton_tol=1e-3 * tol)
         if not res.success:
             raise RuntimeError(f"N={N}: {res.message}")
         out["positions"][N] = np.array(res.positions(-1))

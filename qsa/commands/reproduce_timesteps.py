@@ -48,7 +48,7 @@ def count_steps(tols, N=100, t_final=0.2, method="be", force_normal="centred"):
     for tol in tols:
         t0 = time.process_time()
         res = solve_flow(model, initial, t_final, N=N, tol=tol, method=method,
-                         t_eval=[t_final], progress=False)
+                         t_eval=[t_final], progress=False, newton_tol=1e-3 * tol)
         if not res.success:
             raise RuntimeError(f"tol={tol:g}: {res.message}")
         out[tol] = {"steps": res.n_steps, "rejected": res.n_rejected,

@@ -83,20 +83,60 @@ def interleaved_ordering(system):
 
 
 class SparseLU:
-    """Sparse LU of ``J`` on a symmetric permutation ``perm`` of the unknowns."""
+    """Sparse LU of ``J`` on a symmetric permutation ``perm`` of the unknowns.
+
+    A dense row (the tangential gauge ``h sum Xdot . t = 0`` couples every node)
+    is fatal for a banded factorization: partial pivoting may pick it early
+    (where a tangent is parallel to an axis its entries win) and then every
+    later row fills in. Such rows (more than ``dense_row`` of the columns) are
+    replaced by their entries in the first ``keep`` permuted columns (for the
+    gauge: pinning the tangential motion of node 0, an equally valid gauge) and
+    the difference is added back by the Sherman-Morrison formula: one extra
+    solve per factorization, a dot product per solve. More than ``max_dense``
+    dense rows (a dense block) are factorized as they are.
+    """
 
     kind = "sparse"
 
-    def __init__(self, J, perm=None, permc_spec="COLAMD"):
+    def __init__(self, J, perm=None, permc_spec="NATURAL", keep=8, dense_row=0.25,
+                 max_dense=4):
         J = sp.csc_matrix(J)
-        self.perm = np.arange(J.shape[0]) if perm is None else np.asarray(perm)
-        Jp = J[self.perm][:, self.perm].tocsc()
-        self.lu = spla.splu(Jp, permc_spec=permc_spec)
+        n = J.shape[0]
+        self.perm = np.arange(n) if perm is None else np.asarray(perm)
+        Jp = J[self.perm][:, self.perm].tocsr()
+        counts = np.diff(Jp.indptr)
+        dense = np.flatnonzero(counts > max(64, dense_row * n))
+        if dense.size > max_dense:  # many dense rows (a dense block): plain LU
+            dense = dense[:0]
+        if dense.size:
+            rows = Jp.copy()
+            W = []
+            for r in dense:
+                lo, hi = rows.indptr[r], rows.indptr[r + 1]
+                drop = rows.indices[lo:hi] >= keep
+                w = np.zeros(n)
+                w[rows.indices[lo:hi][drop]] = rows.data[lo:hi][drop]
+                rows.data[lo:hi][drop] = 0.0
+                W.append(w)
+            rows.eliminate_zeros()
+            Jp = rows
+        self.lu = spla.splu(Jp.tocsc(), permc_spec=permc_spec)
+        if dense.size:
+            # J = J0 + E W^T (E = unit vectors of the dense rows): Woodbury of rank |dense|
+            E = np.zeros((n, dense.size))
+            E[dense, np.arange(dense.size)] = 1.0
+            self.Z = self.lu.solve(E)  # J0^{-1} E
+            self.W = np.array(W)  # (k, n)
+            S = np.eye(dense.size) + self.W @ self.Z
+            self.S = sla.lu_factor(S, check_finite=False)
 
     def solve(self, b):
         b = np.asarray(b, dtype=float)
         x = np.empty_like(b)
-        x[self.perm] = self.lu.solve(np.ascontiguousarray(b[self.perm]))
+        z = self.lu.solve(np.ascontiguousarray(b[self.perm]))
+        if hasattr(self, "W"):
+            z = z - self.Z @ sla.lu_solve(self.S, self.W @ z, check_finite=False)
+        x[self.perm] = z
         return x
 
 
