@@ -104,3 +104,21 @@ def test_bdf2_global_error_is_second_order_in_the_step():
         errs.append(np.max(np.abs(res.states[-1][:80] - ref.states[-1][:80])))
     order = np.polyfit(np.log(hs), np.log(errs), 1)[0]
     assert 1.7 < order < 2.4, (errs, order)
+
+
+@pytest.mark.slow
+def test_bdf2_beats_backward_euler_on_the_paper_example():
+    # The appendix example (N = 64, t = 0.05): backward Euler at tol 1e-6 against a BDF2
+    # reference at tol 1e-10; BDF2 at tol 3e-5 is as accurate with >= 5x fewer steps.
+    from tests.flows.test_solve import paper_samples
+
+    model, init, N, T = CHA(**PAPER_CHA), paper_samples(), 64, 0.05
+    ref = solve_flow(model, init, T, N=N, tol=1e-10, method="bdf2", t_eval=[T])
+    be = solve_flow(model, init, T, N=N, tol=1e-6, t_eval=[T])
+    bdf = solve_flow(model, init, T, N=N, tol=3e-5, method="bdf2", t_eval=[T])
+
+    def err(res):
+        return np.max(np.abs(res.states[-1][: 2 * N] - ref.states[-1][: 2 * N]))
+
+    assert err(bdf) <= err(be)
+    assert 5 * bdf.n_steps <= be.n_steps
