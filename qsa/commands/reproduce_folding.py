@@ -11,19 +11,22 @@ from __future__ import annotations
 
 import os
 
-from qsa.commands._simulations import common_arguments, emit, progress, save_figures
+from qsa.commands._simulations import (
+    cha_arguments,
+    common_arguments,
+    emit,
+    progress,
+    save_figures,
+)
 
 HELP = "CHA folding for rho = 1.2, 1.3, 1.4 from identical data (f:fold, Table T1)"
 
 
 def add_arguments(parser):
     common_arguments(parser, "qsa-folding")
-    parser.add_argument("--N", type=int, default=None, help="nodes (default 2400)")
+    cha_arguments(parser)
     parser.add_argument("--rho", type=float, nargs="+", default=[1.2, 1.3, 1.4],
                         help="precompression factors (default 1.2 1.3 1.4)")
-    parser.add_argument("--noise", type=float, default=0.0,
-                        help="relative radial noise in modes 1-30 (default 0)")
-    parser.add_argument("--seed", type=int, default=1, help="noise seed (default 1)")
 
 
 def run(args):
@@ -35,7 +38,8 @@ def run(args):
 
     runs, lines = [], []
     for rho in sorted(args.rho):
-        sc = replace(CHAScenario(), rho=rho, noise=args.noise, seed=args.seed)
+        sc = replace(CHAScenario(), rho=rho, noise=args.noise, seed=args.seed,
+                     l_star=args.l_star)
         out = run_cha(sc, args.out, t_final=args.t_final, N=args.N,
                       resume=args.resume, progress=progress(args))
         runs.append(out)

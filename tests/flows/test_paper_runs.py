@@ -83,6 +83,7 @@ def test_cha_short_run_monitors_and_writes(tmp_path):
     assert out.arrays["approach"].size == out.arrays["t"].size
     assert s["separation_target"] == pytest.approx(0.05 * math.sqrt(1.5))
     name = s["scenario"]
+    assert name == "cha_rho1.3_lstar0.05"  # another l* than Table T1's: its own files
     for suffix in (".npz", ".json", "_checkpoint.npz", "_series.npz"):
         assert (tmp_path / f"{name}{suffix}").is_file()
     # length constraint: equal chords L/N, to the Newton tolerance 1e-3 tol = 1e-7
@@ -106,6 +107,10 @@ def test_cli_facet_and_snowflake_registered():
     for name in ("facet", "snowflake", "folding"):
         args = parser.parse_args(["reproduce", name, "--json", "--no-plots"])
         assert callable(args.func)
+    for name in ("snowflake", "folding"):
+        args = parser.parse_args(["reproduce", name, "--l-star", "0.1", "--N", "600"])
+        assert (args.l_star, args.N) == (0.1, 600)
+        assert parser.parse_args(["reproduce", name]).l_star == 0.01
 
 
 # ------------------------------------------------------------------ full runs
