@@ -143,6 +143,47 @@ class CHAScenario:
     Resolution (``resolution_check``): N = 2400 against 4800 to t = 2e-3, the
     buckling transient, the node positions differ by at most 4.4e-5 =
     0.0044 l* (0.36% of the pair separation).
+
+    Why Table T1 as printed does not fold like f:Snowflake / f:fold
+    (measured, N = 2400, to t = 2.5): 13-fold symmetric lobes until
+    t ~ 0.15-0.2, then a collapse into a few petals with curved neck-bulb
+    contacts; 0 / 2 / 6 sheet pairs for rho = 1.2 / 1.3 / 1.4; no labyrinths
+    or stacked layers. Hypotheses tested with short runs (rho = 1.3, t = 0.3):
+
+    * centred-difference force normal (``CHA(force_normal="centred")``, the
+      paper code's, which explains Table ap:t1): the same run (energy 26.69
+      vs 26.80 at t = 0.3, same symmetric lobes then collapse);
+    * the appendix's printed velocity ``eps (kss - kappa^3)`` instead of
+      ``eps (kss + kappa^3/2)``: symmetry breaks earlier (t ~ 0.03-0.1) but
+      into 3-4 large petals, no labyrinth;
+    * a radial perturbation (``noise = 1e-3``): gradual symmetry breaking
+      from t ~ 3e-3, still large lobes (13 -> 10 pairs of necks at t = 0.3);
+    * the clock: the paper's code advances by k per pass of two steps
+      (MATH.md section 7), so its t = 2.5 is physical time ~5 -- a time
+      rescaling, not a change of shape.
+
+    None changes the morphology. The cause is the length scale: a hairpin
+    of two sheets at the optimal separation ``d = l* sqrt(a^2 + 1/2)``
+    costs bending energy ``pi eps / d`` while pairing gains
+    ``2 sqrt(pi) A0 l* exp(-a^2 - 1/2)`` per unit length, so one fold pays
+    for itself only over ``~ eps / (A0 l*^2)`` units of paired length: 65
+    at Table T1 (l* = 0.01; the whole curve is ~19 long) but 0.65 at
+    l* = 0.1. With l* = 0.1 (``--l-star 0.1``; N = 600 suffices) the runs do
+    what the paper describes: symmetric buckling to t ~ 3e-3, finger pairing
+    breaks the symmetry by t ~ 0.01, labyrinths, then parallel fingers
+    (stacked layers) that settle by t ~ 0.4. Measured (N = 600, to t = 2.5,
+    2.3-2.8 min per run): 9 / 10 / 12 sheet pairs for rho = 1.2 / 1.3 / 1.4
+    (more folds for larger rho), median separation ratios 0.939 / 0.920 /
+    0.905 against l* sqrt(a^2 + 1/2) (the kernel is no longer short against
+    the finger width, so the parallel-strand value is only approached); N =
+    600 vs 1200 to t = 2e-3 differ by 0.055 l*. The ``rho = 1.2`` final
+    state is a labyrinth, not the paper's single rolled-up sheet. The kernel form
+    itself is as printed: the paper's Table ap:t1 (l* = 1/2) is reproduced
+    with ``exp(-|d|^2 / l*^2)`` (differences 0.187 / 0.0396 / 0.0096 for
+    N = 50 / 100 / 200, paper 0.1909 / 0.0397 / 0.0101), not with
+    ``exp(-|d|^2 / l*)`` (0.029 / 0.0063 / 0.0017). So either Table T1's
+    l* (or A0, eps) is misprinted for the folding runs, or they used another
+    setting; qsa keeps Table T1 as the default and documents both.
     """
 
     rho: float = 1.3
