@@ -5,6 +5,11 @@ run writes ``cha_rho<rho>.npz/.json`` and resumes from its own checkpoint;
 the summary compares the number of paired sheets (more folds for larger rho),
 their separation against l* sqrt(a^2 + 1/2), and the self-intersection
 reports (the paper: a glancing self-intersection at rho = 1.4).
+
+With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
+petals, not the paper's labyrinths and stacked layers; ``--l-star 0.1 --N 600``
+gives those (``qsa.flows.scenarios.CHAScenario`` explains why and lists the
+hypotheses tested).
 """
 
 from __future__ import annotations

@@ -6,6 +6,11 @@ separation against l* sqrt(a^2 + 1/2), the self-intersection report and the
 wall time; ``--check-resolution`` first compares N with 2N over a short time.
 The run is stored as ``cha_rho1.3`` (as in ``qsa reproduce folding``), so
 the two commands share it with the same ``--out`` and ``--resume``.
+
+With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
+petals, not the paper's labyrinths and stacked layers; ``--l-star 0.1 --N 600``
+gives those (``qsa.flows.scenarios.CHAScenario`` explains why and lists the
+hypotheses tested).
 """
 
 from __future__ import annotations
