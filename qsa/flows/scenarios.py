@@ -165,7 +165,8 @@ class CHAScenario:
     None changes the morphology. The cause is the length scale: a hairpin
     of two sheets at the optimal separation ``d = l* sqrt(a^2 + 1/2)``
     costs bending energy ``pi eps / d`` while pairing gains
-    ``2 sqrt(pi) A0 l* exp(-a^2 - 1/2)`` per unit length, so one fold pays
+    ``2 sqrt(pi) A0 l* exp(-a^2 - 1/2) / a^2`` per unit length (``fold_balance``),
+    so one fold pays
     for itself only over ``~ eps / (A0 l*^2)`` units of paired length: 65
     at Table T1 (l* = 0.01; the whole curve is ~19 long) but 0.65 at
     l* = 0.1. With l* = 0.1 (``--l-star 0.1``; N = 600 suffices) the runs do
@@ -224,6 +225,29 @@ class CHAScenario:
         d["figure_times"] = list(self.figure_times)
         d["noise_modes"] = list(self.noise_modes)
         return d
+
+    def fold_balance(self):
+        """Energy balance of one fold: bending of a hairpin against the pairing gain.
+
+        Two anti-parallel sheets at the optimal separation
+        ``d = l* sqrt(a^2 + 1/2)`` lower ``E_A`` by
+        ``gain = 2 sqrt(pi) A0 l* exp(-a^2 - 1/2) / a^2`` per unit length (the
+        cross terms ``2 int A(d^2 + u^2) du`` of e:AdhE), while the half-circle
+        joining them costs ``eps/2 int kappa^2 dsigma = pi eps / d``. A fold
+        pays for itself over ``fold_length = (pi eps / d) / gain`` of paired
+        sheet: 65 at Table T1, 0.65 at l* = 0.1.
+
+        Returns
+        -------
+        dict
+            ``pair_gain_per_length``, ``hairpin_energy``, ``fold_length``.
+        """
+        d = self.pair_separation()
+        gain = (2 * math.sqrt(math.pi) * self.A0 * self.l_star
+                * math.exp(-self.a**2 - 0.5) / self.a**2)
+        hairpin = math.pi * self.eps / d
+        return {"pair_gain_per_length": gain, "hairpin_energy": hairpin,
+                "fold_length": hairpin / gain}
 
     def pair_separation(self):
         """The optimal near-contact separation ``l* sqrt(a^2 + 1/2)`` (MATH.md section 6)."""

@@ -92,6 +92,29 @@ def test_cha_short_run_monitors_and_writes(tmp_path):
     assert chords(x, y).sum() == pytest.approx(out.result.length[-1], rel=1e-6)
 
 
+def test_fold_balance_against_the_discrete_adhesion_energy():
+    from qsa.energies.adhesion import AdhesionKernel, adhesion_energy
+
+    sc = CHAScenario(l_star=0.05, a=1.3, A0=7.0)
+    fb = sc.fold_balance()
+    # two straight strands of length 4, spacing h << l*: paired at d minus far apart
+    h, n = 0.005, 800
+    s = h * np.arange(n)
+    d = sc.pair_separation()
+    kernel = AdhesionKernel(sc.A0, sc.l_star, sc.a)
+
+    def energy(gap):
+        return adhesion_energy(kernel, np.r_[s, s], np.r_[np.zeros(n), np.full(n, gap)], h,
+                               method="dense")
+
+    gain = (energy(50 * sc.l_star) - energy(d)) / (n * h)
+    # the strand ends lose O(l* / length) of the overlap
+    assert gain == pytest.approx(fb["pair_gain_per_length"], rel=0.03)
+    assert fb["hairpin_energy"] == pytest.approx(np.pi * sc.eps / d)
+    assert CHAScenario().fold_balance()["fold_length"] == pytest.approx(64.9, abs=0.1)
+    assert CHAScenario(l_star=0.1).fold_balance()["fold_length"] == pytest.approx(0.649, abs=1e-3)
+
+
 def test_resolution_check_compares_common_nodes():
     sc = CHAScenario(r0=0.3, lobes=5, N=64, l_star=0.08)
     rc = resolution_check(sc, t_short=1e-4, progress=False)
