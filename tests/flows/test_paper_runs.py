@@ -165,6 +165,26 @@ def test_folding_full(tmp_path):
     assert abs(runs[1]["separation_ratio"] - 1) < 0.1
 
 
+@pytest.mark.slow
+def test_folding_lstar01_full(tmp_path):
+    """f:fold with l* = 0.1 (``--l-star 0.1 --N 600``; 1.5-2 min per run).
+
+    Measured (qsa reproduce folding --l-star 0.1 --N 600, 90-115 s per run):
+    10 / 11 / 14 sheet pairs for rho = 1.2 / 1.3 / 1.4, median separation
+    ratios 0.939 / 0.924 / 0.905, labyrinths then parallel fingers, no
+    self-intersection. Backward Euler with step doubling at tol 1e-4 lets the
+    energy rise by at most 0.0016 (of ~53) on 21-33 late steps.
+    """
+    runs = [run_cha(CHAScenario(rho=rho, l_star=0.1, N=600), str(tmp_path),
+                    progress=False).summary for rho in (1.2, 1.3, 1.4)]
+    pairs = [s["n_sheet_pairs"] for s in runs]
+    assert all(s["success"] for s in runs)
+    assert all(s["energy_max_increase"] < 1e-4 * s["energy_final"] for s in runs)
+    assert not any(s["self_intersection"]["detected"] for s in runs)
+    assert min(pairs) >= 8 and pairs[-1] > pairs[0]  # many folds, more for larger rho
+    assert all(abs(s["separation_ratio"] - 1) < 0.1 for s in runs)
+
+
 def test_cli_reproduce_facet_short(tmp_path, capsys):
     from qsa.cli import main
 
