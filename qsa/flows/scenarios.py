@@ -158,6 +158,10 @@ class CHAScenario:
       into 3-4 large petals, no labyrinth;
     * a radial perturbation (``noise = 1e-3``): gradual symmetry breaking
       from t ~ 3e-3, still large lobes (13 -> 10 pairs of necks at t = 0.3);
+    * A0 = 4000 (a hundredfold stronger kernel, fold length 0.65 as at
+      l* = 0.1 but at the 0.01 scale; run to t = 0.01 only): the 13 teeth zip
+      into 13 thin symmetric spikes of paired sheets at exactly
+      l* sqrt(a^2 + 1/2) (ratio 1.000), no symmetry breaking by t = 0.01;
     * the clock: the paper's code advances by k per pass of two steps
       (MATH.md section 7), so its t = 2.5 is physical time ~5 -- a time
       rescaling, not a change of shape.
