@@ -176,8 +176,7 @@ class CHAScenario:
     l* = 0.1. At l* = 0.03 (N = 1800) and 0.05 (N = 1200), fold lengths 7.2
     and 2.6, rho = 1.3 still keeps the 13 symmetric lobes to t = 0.3 (defect
     0.005, the grid's). With l* = 0.1 (``--l-star 0.1``; N = 600 suffices) the
-    runs do
-    what the paper describes: symmetric buckling to t ~ 3e-3, finger pairing
+    runs do what the paper describes: symmetric buckling to t ~ 3e-3, finger pairing
     breaks the symmetry by t ~ 0.01, labyrinths, then parallel fingers
     (stacked layers) that settle by t ~ 0.4. Measured (``qsa reproduce
     folding --l-star 0.1 --N 600``, to t = 2.5, 90 / 99 / 115 s per run):
