@@ -20,6 +20,18 @@ def common_arguments(parser, default_out):
     parser.add_argument("--json", action="store_true", help="JSON summary on stdout")
 
 
+def cha_arguments(parser):
+    """Options shared by ``qsa reproduce snowflake`` and ``folding``."""
+    parser.add_argument("--N", type=int, default=None, help="nodes (default 2400)")
+    parser.add_argument("--noise", type=float, default=0.0,
+                        help="relative radial noise in modes 1-30 that breaks the 13-fold "
+                             "symmetry (default 0: the exact crenellated curve)")
+    parser.add_argument("--seed", type=int, default=1, help="noise seed (default 1)")
+    parser.add_argument("--l-star", type=float, default=0.01,
+                        help="kernel length l* (default 0.01, Table T1 as printed; 0.1 "
+                             "gives the paper's labyrinths and layers, see CHAScenario)")
+
+
 def progress(args):
     return False if args.no_progress or args.json else None
 

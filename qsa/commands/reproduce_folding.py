@@ -5,25 +5,33 @@ run writes ``cha_rho<rho>.npz/.json`` and resumes from its own checkpoint;
 the summary compares the number of paired sheets (more folds for larger rho),
 their separation against l* sqrt(a^2 + 1/2), and the self-intersection
 reports (the paper: a glancing self-intersection at rho = 1.4).
+
+With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
+petals, not the paper's labyrinths and stacked layers; ``--l-star 0.1 --N 600``
+gives those (``qsa.flows.scenarios.CHAScenario`` explains why and lists the
+hypotheses tested).
 """
 
 from __future__ import annotations
 
 import os
 
-from qsa.commands._simulations import common_arguments, emit, progress, save_figures
+from qsa.commands._simulations import (
+    cha_arguments,
+    common_arguments,
+    emit,
+    progress,
+    save_figures,
+)
 
 HELP = "CHA folding for rho = 1.2, 1.3, 1.4 from identical data (f:fold, Table T1)"
 
 
 def add_arguments(parser):
     common_arguments(parser, "qsa-folding")
-    parser.add_argument("--N", type=int, default=None, help="nodes (default 2400)")
+    cha_arguments(parser)
     parser.add_argument("--rho", type=float, nargs="+", default=[1.2, 1.3, 1.4],
                         help="precompression factors (default 1.2 1.3 1.4)")
-    parser.add_argument("--noise", type=float, default=0.0,
-                        help="relative radial noise in modes 1-30 (default 0)")
-    parser.add_argument("--seed", type=int, default=1, help="noise seed (default 1)")
 
 
 def run(args):
@@ -35,7 +43,8 @@ def run(args):
 
     runs, lines = [], []
     for rho in sorted(args.rho):
-        sc = replace(CHAScenario(), rho=rho, noise=args.noise, seed=args.seed)
+        sc = replace(CHAScenario(), rho=rho, noise=args.noise, seed=args.seed,
+                     l_star=args.l_star)
         out = run_cha(sc, args.out, t_final=args.t_final, N=args.N,
                       resume=args.resume, progress=progress(args))
         runs.append(out)

@@ -6,23 +6,31 @@ separation against l* sqrt(a^2 + 1/2), the self-intersection report and the
 wall time; ``--check-resolution`` first compares N with 2N over a short time.
 The run is stored as ``cha_rho1.3`` (as in ``qsa reproduce folding``), so
 the two commands share it with the same ``--out`` and ``--resume``.
+
+With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
+petals, not the paper's labyrinths and stacked layers; ``--l-star 0.1 --N 600``
+gives those (``qsa.flows.scenarios.CHAScenario`` explains why and lists the
+hypotheses tested).
 """
 
 from __future__ import annotations
 
-from qsa.commands._simulations import common_arguments, emit, fmt, progress, save_figures
+from qsa.commands._simulations import (
+    cha_arguments,
+    common_arguments,
+    emit,
+    fmt,
+    progress,
+    save_figures,
+)
 
 HELP = "CHA adhesion flow from the crenellated start, rho=1.3 (f:Snowflake, Table T1)"
 
 
 def add_arguments(parser):
     common_arguments(parser, "qsa-snowflake")
-    parser.add_argument("--N", type=int, default=None, help="nodes (default 2400)")
+    cha_arguments(parser)
     parser.add_argument("--rho", type=float, default=1.3, help="precompression (default 1.3)")
-    parser.add_argument("--noise", type=float, default=0.0,
-                        help="relative radial noise in modes 1-30 that breaks the 13-fold "
-                             "symmetry (default 0: the exact crenellated curve)")
-    parser.add_argument("--seed", type=int, default=1, help="noise seed (default 1)")
     parser.add_argument("--check-resolution", type=float, default=None, metavar="T",
                         help="first run N and 2N to time T and report the difference")
 
@@ -54,7 +62,8 @@ def run(args):
     from qsa.flows.paper_runs import resolution_check, run_cha
     from qsa.flows.scenarios import CHAScenario
 
-    sc = replace(CHAScenario(), rho=args.rho, noise=args.noise, seed=args.seed)
+    sc = replace(CHAScenario(), rho=args.rho, noise=args.noise, seed=args.seed,
+                 l_star=args.l_star)
     summary, lines = {}, []
     if args.check_resolution:
         rc = resolution_check(sc, args.N, args.check_resolution, progress=progress(args))

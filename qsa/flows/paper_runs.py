@@ -358,7 +358,8 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     out : str, optional
         Output folder (``<name>.npz``, ``<name>.json``, checkpoint).
     name : str, optional
-        File stem (default ``cha_rho<rho>``).
+        File stem (default ``cha_rho<rho>``, plus ``_lstar<l*>`` when l* is
+        not Table T1's 0.01).
     t_final, N : optional
         Override the scenario's final time and number of nodes.
     resume : bool
@@ -379,7 +380,9 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     sc = CHAScenario() if scenario is None else scenario
     t_final = sc.t_final if t_final is None else float(t_final)
     N = sc.N if N is None else int(N)
-    name = name or f"cha_rho{sc.rho:g}"
+    if name is None:  # runs with another kernel length do not share checkpoints
+        name = f"cha_rho{sc.rho:g}" + ("" if sc.l_star == CHAScenario.l_star
+                                        else f"_lstar{sc.l_star:g}")
     model = sc.model()
     wall0 = time.perf_counter()
     ck = None if out is None else os.path.join(out, f"{name}_checkpoint.npz")

@@ -143,6 +143,59 @@ class CHAScenario:
     Resolution (``resolution_check``): N = 2400 against 4800 to t = 2e-3, the
     buckling transient, the node positions differ by at most 4.4e-5 =
     0.0044 l* (0.36% of the pair separation).
+
+    Why Table T1 as printed does not fold like f:Snowflake / f:fold
+    (measured, N = 2400, to t = 2.5): 13-fold symmetric lobes until
+    t ~ 0.15-0.2, then a collapse into a few petals with curved neck-bulb
+    contacts; 0 / 2 / 6 sheet pairs for rho = 1.2 / 1.3 / 1.4; no labyrinths
+    or stacked layers. Hypotheses tested with short runs (rho = 1.3, t = 0.3):
+
+    * centred-difference force normal (``CHA(force_normal="centred")``, the
+      paper code's, which explains Table ap:t1): the same run (energy 26.69
+      vs 26.80 at t = 0.3, same symmetric lobes then collapse);
+    * the appendix's printed velocity ``eps (kss - kappa^3)`` instead of
+      ``eps (kss + kappa^3/2)``: symmetry breaks earlier (t ~ 0.03-0.1) but
+      into 3-4 large petals, no labyrinth;
+    * a radial perturbation (``noise = 1e-3``): gradual symmetry breaking
+      from t ~ 3e-3, still large lobes (13 -> 10 pairs of necks at t = 0.3);
+    * A0 = 4000 (a hundredfold stronger kernel, fold length 0.65 as at
+      l* = 0.1 but at the 0.01 scale; run to t = 0.01 only): the 13 teeth zip
+      into 13 thin symmetric spikes of paired sheets at exactly
+      l* sqrt(a^2 + 1/2) (ratio 1.000), no symmetry breaking by t = 0.01;
+    * the clock: the paper's code advances by k per pass of two steps
+      (MATH.md section 7), so its t = 2.5 is physical time ~5 -- a time
+      rescaling, not a change of shape.
+
+    None changes the morphology. The cause is the length scale: a hairpin
+    of two sheets at the optimal separation ``d = l* sqrt(a^2 + 1/2)``
+    costs bending energy ``pi eps / d`` while pairing gains
+    ``2 sqrt(pi) A0 l* exp(-a^2 - 1/2) / a^2`` per unit length
+    (``fold_balance``), so one fold pays for itself only over
+    ``~ eps / (A0 l*^2)`` units of paired length: 65
+    at Table T1 (l* = 0.01; the whole curve is ~19 long) but 0.65 at
+    l* = 0.1. At l* = 0.03 (N = 1800) and 0.05 (N = 1200), fold lengths 7.2
+    and 2.6, rho = 1.3 still keeps the 13 symmetric lobes to t = 0.3 (defect
+    0.005, the grid's). With l* = 0.1 (``--l-star 0.1``; N = 600 suffices) the
+    runs do what the paper describes: symmetric buckling to t ~ 3e-3, finger pairing
+    breaks the symmetry by t ~ 0.01, labyrinths, then parallel fingers
+    (stacked layers) that settle by t ~ 0.4. Measured (``qsa reproduce
+    folding --l-star 0.1 --N 600``, to t = 2.5, 90 / 99 / 115 s per run):
+    10 / 11 / 14 sheet pairs for rho = 1.2 / 1.3 / 1.4 (more folds for
+    larger rho; the counts move by 1-2 with the step sequence, e.g. 9 / 10 /
+    12 with other snapshot times), median separation ratios 0.939 / 0.924 /
+    0.905 against l* sqrt(a^2 + 1/2) (closest points 0.73 / 0.72 / 0.70: the
+    kernel is no longer short against the finger width), no
+    self-intersection, closest approach during the buckling transient
+    (t ~ 5e-4) 0.055 / 0.042 / 0.030 -- falling with rho, towards the
+    paper's glancing contact at 1.4. N = 600 vs 1200 to t = 2e-3 differ by
+    0.055 l*. The rho = 1.2 end state is a labyrinth, not the paper's single
+    rolled-up sheet, and it settles by t ~ 0.4 rather than relaxing to 2.5.
+    The kernel form itself is as printed: the paper's Table ap:t1 (l* = 1/2) is reproduced
+    with ``exp(-|d|^2 / l*^2)`` (differences 0.187 / 0.0396 / 0.0096 for
+    N = 50 / 100 / 200, paper 0.1909 / 0.0397 / 0.0101), not with
+    ``exp(-|d|^2 / l*)`` (0.029 / 0.0063 / 0.0017). So either Table T1's
+    l* (or A0, eps) is misprinted for the folding runs, or they used another
+    setting; qsa keeps Table T1 as the default and documents both.
     """
 
     rho: float = 1.3
@@ -183,6 +236,29 @@ class CHAScenario:
         d["figure_times"] = list(self.figure_times)
         d["noise_modes"] = list(self.noise_modes)
         return d
+
+    def fold_balance(self):
+        """Energy balance of one fold: bending of a hairpin against the pairing gain.
+
+        Two anti-parallel sheets at the optimal separation
+        ``d = l* sqrt(a^2 + 1/2)`` lower ``E_A`` by
+        ``gain = 2 sqrt(pi) A0 l* exp(-a^2 - 1/2) / a^2`` per unit length (the
+        cross terms ``2 int A(d^2 + u^2) du`` of e:AdhE), while the half-circle
+        joining them costs ``eps/2 int kappa^2 dsigma = pi eps / d``. A fold
+        pays for itself over ``fold_length = (pi eps / d) / gain`` of paired
+        sheet: 65 at Table T1, 0.65 at l* = 0.1.
+
+        Returns
+        -------
+        dict
+            ``pair_gain_per_length``, ``hairpin_energy``, ``fold_length``.
+        """
+        d = self.pair_separation()
+        gain = (2 * math.sqrt(math.pi) * self.A0 * self.l_star
+                * math.exp(-self.a**2 - 0.5) / self.a**2)
+        hairpin = math.pi * self.eps / d
+        return {"pair_gain_per_length": gain, "hairpin_energy": hairpin,
+                "fold_length": hairpin / gain}
 
     def pair_separation(self):
         """The optimal near-contact separation ``l* sqrt(a^2 + 1/2)`` (MATH.md section 6)."""

@@ -200,8 +200,10 @@ def cha_figures(arrays, summary, times=None):
         ax.remove()
     ax = fig.add_subplot(gs[-1, :])
     plot_energy_history(arrays["t_steps"], arrays["energy_steps"], ax=ax)
-    rho = summary["params"]["rho"]
-    fig.suptitle(f"CHA flow, rho = {rho:g} (Table T1), N = {summary['params']['N']}")
+    params = summary["params"]
+    ls = params.get("l_star", 0.01)
+    source = "Table T1" if ls == 0.01 else f"Table T1 but l* = {ls:g}"
+    fig.suptitle(f"CHA flow, rho = {params['rho']:g} ({source}), N = {params['N']}")
     return {"snapshots": fig}
 
 

@@ -83,12 +83,36 @@ def test_cha_short_run_monitors_and_writes(tmp_path):
     assert out.arrays["approach"].size == out.arrays["t"].size
     assert s["separation_target"] == pytest.approx(0.05 * math.sqrt(1.5))
     name = s["scenario"]
+    assert name == "cha_rho1.3_lstar0.05"  # another l* than Table T1's: its own files
     for suffix in (".npz", ".json", "_checkpoint.npz", "_series.npz"):
         assert (tmp_path / f"{name}{suffix}").is_file()
     # length constraint: equal chords L/N, to the Newton tolerance 1e-3 tol = 1e-7
     x, y = out.result.x, out.result.y
     assert np.ptp(chords(x, y)) < 1e-6
     assert chords(x, y).sum() == pytest.approx(out.result.length[-1], rel=1e-6)
+
+
+def test_fold_balance_against_the_discrete_adhesion_energy():
+    from qsa.energies.adhesion import AdhesionKernel, adhesion_energy
+
+    sc = CHAScenario(l_star=0.05, a=1.3, A0=7.0)
+    fb = sc.fold_balance()
+    # two straight strands of length 4, spacing h << l*: paired at d minus far apart
+    h, n = 0.005, 800
+    s = h * np.arange(n)
+    d = sc.pair_separation()
+    kernel = AdhesionKernel(sc.A0, sc.l_star, sc.a)
+
+    def energy(gap):
+        return adhesion_energy(kernel, np.r_[s, s], np.r_[np.zeros(n), np.full(n, gap)], h,
+                               method="dense")
+
+    gain = (energy(50 * sc.l_star) - energy(d)) / (n * h)
+    # the strand ends lose O(l* / length) of the overlap
+    assert gain == pytest.approx(fb["pair_gain_per_length"], rel=0.03)
+    assert fb["hairpin_energy"] == pytest.approx(np.pi * sc.eps / d)
+    assert CHAScenario().fold_balance()["fold_length"] == pytest.approx(64.9, abs=0.1)
+    assert CHAScenario(l_star=0.1).fold_balance()["fold_length"] == pytest.approx(0.649, abs=1e-3)
 
 
 def test_resolution_check_compares_common_nodes():
@@ -106,6 +130,10 @@ def test_cli_facet_and_snowflake_registered():
     for name in ("facet", "snowflake", "folding"):
         args = parser.parse_args(["reproduce", name, "--json", "--no-plots"])
         assert callable(args.func)
+    for name in ("snowflake", "folding"):
+        args = parser.parse_args(["reproduce", name, "--l-star", "0.1", "--N", "600"])
+        assert (args.l_star, args.N) == (0.1, 600)
+        assert parser.parse_args(["reproduce", name]).l_star == 0.01
 
 
 # ------------------------------------------------------------------ full runs
@@ -135,6 +163,26 @@ def test_folding_full(tmp_path):
     assert not any(s["self_intersection"]["detected"] for s in runs)
     assert pairs == sorted(pairs) and pairs[-1] > pairs[0]  # more folds for larger rho
     assert abs(runs[1]["separation_ratio"] - 1) < 0.1
+
+
+@pytest.mark.slow
+def test_folding_lstar01_full(tmp_path):
+    """f:fold with l* = 0.1 (``--l-star 0.1 --N 600``; 1.5-2 min per run).
+
+    Measured (qsa reproduce folding --l-star 0.1 --N 600, 90-115 s per run):
+    10 / 11 / 14 sheet pairs for rho = 1.2 / 1.3 / 1.4, median separation
+    ratios 0.939 / 0.924 / 0.905, labyrinths then parallel fingers, no
+    self-intersection. Backward Euler with step doubling at tol 1e-4 lets the
+    energy rise by at most 0.0016 (of ~53) on 21-33 late steps.
+    """
+    runs = [run_cha(CHAScenario(rho=rho, l_star=0.1, N=600), str(tmp_path),
+                    progress=False).summary for rho in (1.2, 1.3, 1.4)]
+    pairs = [s["n_sheet_pairs"] for s in runs]
+    assert all(s["success"] for s in runs)
+    assert all(s["energy_max_increase"] < 1e-4 * s["energy_final"] for s in runs)
+    assert not any(s["self_intersection"]["detected"] for s in runs)
+    assert min(pairs) >= 8 and pairs[-1] > pairs[0]  # many folds, more for larger rho
+    assert all(abs(s["separation_ratio"] - 1) < 0.1 for s in runs)
 
 
 def test_cli_reproduce_facet_short(tmp_path, capsys):
