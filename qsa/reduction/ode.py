@@ -106,27 +106,48 @@ therefore needs ``eps`` far below 1%; a few per cent of rate error is already a
 several-per-cent collision-time error and, at ``t -> t_c``, an O(facet) position
 error.
 
+Accuracy
+--------
 Measured (``qsa reproduce fronts``, alpha = 0.1, kstar = 5, beta = 5; the DAE
 collision time converges like ``N^-2`` and was extrapolated from N = 600, 1200,
 2400): triangle (130, 120, 110 degrees) ``t_c`` 2.7726 (ODE) against 2.745
 (DAE, N -> inf), +1.0%; trapezoid with a short facet 0.06546 against 0.06331,
-+3.4%. At the DAE's own states the ODE closes the short facet 2-4% slower;
-part of it is the perimeter mode (the difference is 4.3%, 3.3%, 2.5%, 2.5% for
-beta = 0.5, 5, 50, 500) and is captured by the variable-length reduction
-(``FrontODE(beta=...)``: 2.0%, 2.3%, 2.4%, 2.5%; triangle +0.33% against the
-extrapolated DAE and 0.06% against N = 2400, positions within 0.08% of the
-smallest facet up to 0.99 ``t_c``), the rest (~2.5%) is not removed by a stiffer perimeter
-and does not depend on alpha at fixed ``lambda d`` (3.34% at alpha = 0.05 with
-the short facet halved, 3.35% at alpha = 0.1): it is not an O(alpha)
-correction. The splice's own ``V^n`` is 100x larger than its tangential part
-(a fast component the flow relaxes in ``~ 1/(2 pi beta / R)``); the Galerkin
-projection is exact at the splice (tested to 1e-7 against
-``Energy.normal_velocity``), so the residual difference is the offset of the
-true slow manifold from the splices.
-Positions agree within 5% of the smallest facet up to 0.95 ``t_c`` (0.6% and
-2.7%) and then diverge as above. The slow eigenvalues agree with the full
-linearization (``qsa.spectra``) within ~1% at polished regular polygons (see
-:func:`qsa.reduction.compare.compare_eigenvalues`).
++3.4%. Part of it is the perimeter mode, captured by the variable-length
+reduction (``FrontODE(beta=...)``: short facet +2.4%; triangle +0.33% against
+the extrapolated DAE, positions within 0.08% of the smallest facet up to 0.99
+``t_c``). Positions agree within 5% of the smallest facet up to 0.95 ``t_c``
+(0.6% and 2.7%) and then diverge as above. The slow eigenvalues agree with the
+full linearization (``qsa.spectra``) within ~1% at polished regular polygons
+(see :func:`qsa.reduction.compare.compare_eigenvalues`).
+
+*Where the remaining rate error comes from* (``benchmarks/diag_front_rates.py``:
+DAE states at fractions of ``t_c``, splice fitted to the same ``kstar/2``
+crossings, closing rate of the shortest gap; beta = 500 so the length is fixed,
+N = 1200 and 2400 agree to ~0.1%). It is *not* a constant: on the short facet
+the ODE closes it slower by ``eps_F`` = 0.95, 1.5, 2.1, 2.7, 3.6, 6.7% at
+``t/t_c`` = 0.1, 0.3, 0.5, 0.7, 0.85, 0.95 (gap 0.269 ... 0.193), tracking
+``eps_F ~ -psi_mid / kstar`` (the splice's tail overlap at the centre of the
+gap, ``~ exp(-lambda d / 2)``; this is why it depends on ``lambda d`` and not
+on alpha). ``kappa_DAE - psi_N(p)`` is localized in the centre of the closing
+gap (max about 3 front widths inside it, +2.0% ... +7.5% of ``psi_mid``), not
+at the corners (the O(alpha) curvature correction is < 1e-3 there) nor at the
+cutoff (the other facets' centres differ by ~1e-3, absolute): the splice superposes the
+overlapping tails linearly, while the well's nonlinearity lifts the true
+quasi-steady profile there, which strengthens the attraction. Evaluating the
+reduced force with the DAE state's own residual removes most of it (``eps_R``
+0.24 ... 1.7%). One Newton step from the splice (:meth:`slow_correction`,
+``correction="newton"``) predicts the lift (+2.5 ... +9.3%) and gives
+``eps_N`` = 0.08 ... 1.1%; the remaining ~1% is in the metric (the splice's
+tangent fields). Collision times with ``correction="newton"``: short facet
+0.06414 (fixed length) against 0.06394 (DAE, beta = 500, N = 2400), +0.3%
+(uncorrected +2.4%); with ``beta = 5`` and the variable length 0.06352
+against 0.06331, +0.3% (uncorrected +2.4%). Triangle (fixed length, DAE
+beta = 500, N = 1200: 2.7929): 2.7665 (-0.9%) against 2.7727 (-0.7%)
+uncorrected: its late-time rate error halves (1.2% -> 0.55% at ``t/t_c =
+0.95``), but an early +1% (``t/t_c ~ 0.1``, rates 20x slower than late) that
+the correction does not touch dominates its collision time. The correction
+costs a dense ``M x M`` solve per evaluation (~5-8x the uncorrected ODE's CPU
+time).
 """
 
 from __future__ import annotations
@@ -200,6 +221,12 @@ class FrontODE:
         unknown (state ``(p, L)``, see "Variable length" in the module docstring).
     L_star : float, optional
         Preferred length (default ``length``).
+    correction : {None, "newton"}
+        ``"newton"``: evaluate the force ``dE/dp_j`` with the residual of the
+        profile corrected by one Newton step towards the slow manifold
+        (:meth:`slow_correction`) instead of the splice's own residual; removes
+        most of the rate error of closing pairs (see "Accuracy"). Costs a dense
+        solve of size ``M`` (quadrature nodes) per evaluation.
     """
 
     alpha: float
@@ -210,6 +237,7 @@ class FrontODE:
     points_per_width: float = 3.0
     beta: float = None
     L_star: float = None
+    correction: str = None
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)
 
@@ -227,6 +255,8 @@ class FrontODE:
             raise ValueError(f"beta must be non-negative, got {self.beta!r}")
         if self.L_star is None:
             object.__setattr__(self, "L_star", float(self.length))
+        if self.correction not in (None, "newton"):
+            raise ValueError(f"correction must be None or 'newton', got {self.correction!r}")
 
     # ------------------------------------------------------------ geometry
     @property
@@ -323,6 +353,43 @@ class FrontODE:
         """``dE/dp_j = int R_kappa d psi_N/d p_j dsigma``, shape (2N,)."""
         return self._gradient(self._fields(p, cutoff))
 
+    def _correction(self, f):
+        """Newton step ``delta`` and the corrected residual (see :meth:`slow_correction`)."""
+        psi, W, a2, L = f["psi"], self.front.well, self.alpha**2, f["L"]
+        M = psi.size
+        k = 2 * np.pi * np.fft.fftfreq(M, d=1.0 / M)  # unit-length wavenumbers
+        D2 = np.fft.ifft(-(k**2)[:, None] * np.fft.fft(np.eye(M), axis=0), axis=0).real / L**2
+        R = -a2 * f["d2"] + W.dW(psi)
+        B = np.column_stack([f["dpsi"], np.ones(M)])
+        nb = B.shape[1]
+        K = np.block([[-a2 * D2 + np.diag(W.d2W(psi)), B], [B.T, np.zeros((nb, nb))]])
+        rhs = np.concatenate([-R, np.zeros(nb)])
+        try:
+            delta = np.linalg.solve(K, rhs)[:M]
+        except np.linalg.LinAlgError:
+            delta = np.linalg.lstsq(K, rhs, rcond=1e-12)[0][:M]
+        Rc = -a2 * (f["d2"] + D2 @ delta) + W.dW(psi + delta)
+        return delta, Rc
+
+    def slow_correction(self, p, cutoff=None):
+        """One Newton step from the splice towards the slow manifold.
+
+        Solves ``(-alpha^2 d^2 + W''(psi_N)) delta = -R_kappa`` modulo the front
+        translation modes ``d psi_N / d p_j`` and a constant (``delta`` orthogonal
+        to them: the positions and the total turning are kept). The splice
+        superposes the fronts' tails linearly; ``delta`` is the nonlinear response
+        (through the curvature of ``W'``) to the overlapping tails, of relative size
+        ``O(exp(-lambda d / 2))`` in the centre of a gap of width ``d``.
+
+        Returns
+        -------
+        delta : ndarray, shape (M,)
+            On :attr:`sigma`.
+        R : ndarray, shape (M,)
+            The residual ``-alpha^2 kappa'' + W'(kappa)`` of ``psi_N + delta``.
+        """
+        return self._correction(self._fields(self._check(p), cutoff))
+
     def _normal(self, f):
         # d gamma / d p_j = -int_0^sigma n Theta_j. Theta_j = (periodic) + c_j s, so with
         # m = int_0^s n ds' (periodic on a closed curve) and
@@ -402,7 +469,10 @@ class FrontODE:
         f = self._fields(p, cutoff, L)
         phi = self._normal(f)
         G = phi.T @ (f["w"][:, None] * phi)
-        dE = self._gradient(f)
+        if self.correction == "newton":
+            dE = (self._correction(f)[1] * f["w"]) @ f["dpsi"]
+        else:
+            dE = self._gradient(f)
         _, J = self._constraints(f)
         n = p.size
         A = np.vstack([J, np.ones((1, n)) / np.sqrt(n)])
