@@ -107,7 +107,8 @@ def _centred(P, L):
 
 
 def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, t_final=None,
-                   tol=1e-6, method="bdf2", rtol=1e-4, fractions=(0.5, 0.9, 0.95, 0.99)):
+                   tol=1e-6, method="bdf2", rtol=1e-4, fractions=(0.5, 0.9, 0.95, 0.99),
+                   correction=None):
     """Run the DAE flow and the front ODE from the same splice and compare them.
 
     Parameters
@@ -127,6 +128,8 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         converged value, far below the model error).
     fractions : tuple of float
         Fractions of the DAE collision time at which the error is reported.
+    correction : {None, "newton"}
+        Force correction of both reductions (:class:`qsa.reduction.FrontODE`).
 
     Returns
     -------
@@ -168,7 +171,7 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
     tc_dae = tracks.first_collision.time if tracks.events else np.nan
     alive = np.all(np.isfinite(tracks.positions), axis=1)
 
-    ode = FrontODE(alpha, kstar, L)
+    ode = FrontODE(alpha, kstar, L, correction=correction)
     start = time.process_time()
     sol = ode.integrate(p0, t_final, rtol=rtol, max_collisions=0)
     time_ode = time.process_time() - start
@@ -204,7 +207,7 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
             cs -= cs.mean(axis=1, keepdims=True)
             rescaled = float(np.max(np.abs(cs - dae[: cs.shape[0]])) / facet_min)
     variable = _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min,
-                                fractions, time_dae)
+                                fractions, time_dae, correction=correction)
     # validity of the splice manifold: both fronts of every pair still separated
     dc = ode.collision_distance
     gaps_dae = np.min(np.abs(np.diff(np.sort(dae, axis=1), axis=1)), axis=1)
@@ -212,6 +215,7 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
     summary = {
         "scenario": sc.name, "description": sc.description, "alpha": alpha, "kstar": kstar,
         "beta": beta, "N": int(N), "L": float(L), "facet_min": facet_min,
+        "correction": correction,
         "collision_dae": float(tc_dae), "collision_ode": float(tc_ode),
         "collision_rel_diff": float(abs(tc_ode - tc_dae) / tc_dae),
         "max_error": float(np.max(error[before])) if np.any(before) else np.nan,
@@ -230,9 +234,9 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
 
 
 def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min, fractions,
-                     time_dae, rtol=1e-5):
+                     time_dae, rtol=1e-5, correction=None):
     """Collision time and position errors of the variable-length reduction."""
-    ode = FrontODE(alpha, kstar, L, beta=beta)
+    ode = FrontODE(alpha, kstar, L, beta=beta, correction=correction)
     start = time.process_time()
     sol = ode.integrate(p0, t_final, rtol=rtol, method="Radau", max_collisions=0)
     cpu = time.process_time() - start

@@ -147,7 +147,10 @@ uncorrected: its late-time rate error halves (1.2% -> 0.55% at ``t/t_c =
 0.95``), but an early +1% (``t/t_c ~ 0.1``, rates 20x slower than late) that
 the correction does not touch dominates its collision time. The correction
 costs a dense ``M x M`` solve per evaluation (~5-8x the uncorrected ODE's CPU
-time).
+time). ``qsa reproduce fronts --scenario short-facet --correction newton`` (beta =
+5, N = 1200): variable length ``t_c`` +0.29% (uncorrected +2.38%), positions
+within 0.08%, 0.15%, 0.43% of the smallest facet up to 0.9, 0.95, 0.99 ``t_c``
+(uncorrected 0.84%, 1.68%, 6.26%); fixed length +1.26% (uncorrected +3.35%).
 """
 
 from __future__ import annotations
