@@ -50,6 +50,7 @@ import scipy.sparse as sp
 from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
+from qsa._checks import real_number
 from qsa.energies.base import Energy
 
 __all__ = [
@@ -69,13 +70,7 @@ __all__ = [
 
 
 def _positive(value, name):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    return v
+    return real_number(value, name, positive=True)
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from qsa._checks import real_number
+
 __all__ = ["QuarticWell", "resolve_well", "is_quartic"]
 
 
@@ -54,13 +56,7 @@ def _default_well(kstar):
 
 
 def _positive(x, name):
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive number, got {x!r}") from None
-    if not np.isfinite(x) or x <= 0:
-        raise ValueError(f"{name} must be a positive finite number, got {x!r}")
-    return x
+    return real_number(x, name, positive=True)
 
 
 def is_quartic(well, kstar) -> bool:

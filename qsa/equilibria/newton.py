@@ -57,6 +57,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from qsa._checks import real_number
 from qsa.curve import Curve
 from qsa.discretize import FiniteDifference
 from qsa.equilibria.result import Equilibrium
@@ -661,13 +662,7 @@ def _check_curve(energy, curve):
 
 
 def _check_positive(value, name):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from None
-    if not np.isfinite(v) or v <= 0:
-        raise ValueError(f"{name} must be a positive number, got {value!r}")
-    return v
+    return real_number(value, name, positive=True)
 
 
 def _check_maxiter(maxiter):

@@ -54,6 +54,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import expit
 
+from qsa._checks import real_number
 from qsa.equilibria._wells import _positive, is_quartic, resolve_well
 
 __all__ = ["PeriodicOrbit", "periodic_orbit", "periodic_range"]
@@ -456,13 +457,7 @@ def periodic_range(nu1=0.0, well=None, kstar=None):
 
 
 def _finite(x, name):
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite number, got {x!r}") from None
-    if not np.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x!r}")
-    return x
+    return real_number(x, name)
 
 
 def periodic_orbit(alpha, nu2, nu1=0.0, well=None, kstar=None) -> PeriodicOrbit:

@@ -16,7 +16,6 @@ in practice bit for bit).
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 import tempfile
@@ -25,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from qsa._checks import real_number
 from qsa._version import __version__
 from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
 from qsa.io import load_npz, save_npz
@@ -116,13 +116,7 @@ class FlowResult:
 
 # --------------------------------------------------------------- input checks
 def _positive_float(value, name, allow_inf=False):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from None
-    if math.isnan(v) or v <= 0 or (math.isinf(v) and not allow_inf):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
+    return real_number(value, name, positive=True, allow_inf=allow_inf)
 
 
 def prepare_initial(initial, N=None):

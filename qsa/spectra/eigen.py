@@ -49,6 +49,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from qsa import geometry
+from qsa._checks import real_number
 from qsa.curve import Curve
 from qsa.discretize import FiniteDifference, Fourier
 from qsa.linalg import SparsePlusLowRank, to_dense
@@ -515,13 +516,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
 
 
 def _positive(x, name):
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive number, got {x!r}") from None
-    if not (np.isfinite(x) and x > 0):
-        raise ValueError(f"{name} must be a positive number, got {x}")
-    return x
+    return real_number(x, name, positive=True)
 
 
 # ---------------------------------------------------------------- eigen-solvers

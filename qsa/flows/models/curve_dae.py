@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from qsa._checks import real_number
 from qsa.curve import self_intersections
 from qsa.flows.base import DAESystem
 
@@ -19,17 +20,7 @@ __all__ = ["CurveDAE", "equalize_chords", "self_intersections"]
 
 # ----------------------------------------------------------------- helpers
 def _number(value, name, *, positive=False, nonnegative=False):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    if positive and not v > 0:
-        raise ValueError(f"{name} must be positive, got {value!r}")
-    if nonnegative and not v >= 0:
-        raise ValueError(f"{name} must be non-negative, got {value!r}")
-    return v
+    return real_number(value, name, positive=positive, nonnegative=nonnegative)
 
 
 def _check_xy(x, y, min_nodes):
