@@ -23,6 +23,13 @@ def new_figure(ncols=1, nrows=1, size=(5.0, 4.0)):
     return fig, axes
 
 
+def figure_pair(axes=None, size=(5.0, 4.0)):
+    """``(fig, axes)``: a new two-panel figure, or the figure of the given pair of axes."""
+    if axes is None:
+        return new_figure(ncols=2, size=size)
+    return axes[0].figure, axes
+
+
 def plot_curve(curve, ax=None, color="C0", mark_start=True):
     """Draw the closed curve ``gamma`` (equal aspect); the open circle marks ``gamma(0)``."""
     if ax is None:
@@ -62,10 +69,7 @@ def plot_curve_and_curvature(curve, axes=None, title=None):
     -------
     Figure
     """
-    if axes is None:
-        fig, axes = new_figure(ncols=2)
-    else:
-        fig = axes[0].figure
+    fig, axes = figure_pair(axes)
     plot_curve(curve, axes[0])
     plot_curvature(curve, axes[1])
     if title:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from qsa.plotting._core import new_figure
+from qsa.plotting._core import figure_pair, new_figure
 
 __all__ = ["plot_flow", "plot_energy_history", "plot_convergence", "plot_timesteps"]
 
@@ -24,10 +24,7 @@ def plot_flow(result, axes=None, max_curves=6, title=None):
     -------
     Figure
     """
-    if axes is None:
-        fig, axes = new_figure(ncols=2)
-    else:
-        fig = axes[0].figure
+    fig, axes = figure_pair(axes)
     n = len(result.t)
     pick = np.unique(np.linspace(0, n - 1, min(max_curves, n)).round().astype(int))
     ax = axes[0]

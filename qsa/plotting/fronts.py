@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from qsa.plotting._core import new_figure
+from qsa.plotting._core import figure_pair
 
 __all__ = ["plot_front_tracks"]
 
@@ -26,10 +26,7 @@ def plot_front_tracks(comparison, axes=None, title=None):
     Figure
     """
     c = comparison
-    if axes is None:
-        fig, axes = new_figure(ncols=2)
-    else:
-        fig = axes[0].figure
+    fig, axes = figure_pair(axes)
     ax = axes[0]
     for i in range(c.dae.shape[1]):
         color = f"C{i % 10}"

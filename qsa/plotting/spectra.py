@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from qsa.plotting._core import new_figure, plot_curve
+from qsa.plotting._core import figure_pair, new_figure, plot_curve
 
 __all__ = ["plot_spectrum", "plot_eigenmode", "eigenmode_fields"]
 
@@ -102,10 +102,7 @@ def plot_eigenmode(spec, curve, index=0, amplitude=None, axes=None, title=None):
     -------
     Figure
     """
-    if axes is None:
-        fig, axes = new_figure(ncols=2)
-    else:
-        fig = axes[0].figure
+    fig, axes = figure_pair(axes)
     phi, k1 = eigenmode_fields(spec, curve, index)
     s = curve.grid.s
     lam = spec.eigenvalues[index]
