@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from qsa.curve import polygon_self_intersects
+from qsa.curve import self_intersections
 
 __all__ = [
     "front_crossings",
@@ -466,7 +466,8 @@ class SelfIntersectionMonitor:
     """Record polygon self-intersections and the closest approach along a flow.
 
     Call it with ``(t, x, y)`` after every accepted step. It keeps the times at
-    which the node polygon crosses itself (``qsa.curve.polygon_self_intersects``)
+    which the node polygon crosses itself (:func:`qsa.curve.self_intersections`),
+    where the first crossing happened (the state and the crossing segments),
     and, when ``exclude_arc`` is given, the time series of the closest
     approach of parts of the curve more than ``exclude_arc`` apart.
 
@@ -478,16 +479,25 @@ class SelfIntersectionMonitor:
         Times at which the polygon crossed itself.
     approach : list of float
         Closest approach at each observed time (when ``exclude_arc`` is set).
+    first_crossing : dict or None
+        At the first crossing: ``t``, the nodes ``x``, ``y``, the crossing
+        segment pairs ``segments`` (shape (K, 2)), their arc-length gap along
+        the curve ``arc_gap`` (shape (K,)) and the crossing points ``points``
+        (shape (K, 2)).
     """
 
     def __init__(self, exclude_arc=None):
         self.exclude_arc = exclude_arc
         self.times, self.crossing_times, self.approach = [], [], []
+        self.first_crossing = None
 
     def __call__(self, t, x, y):
         self.times.append(float(t))
-        if polygon_self_intersects(x, y):
+        segs = self_intersections(x, y)
+        if segs.shape[0]:
             self.crossing_times.append(float(t))
+            if self.first_crossing is None:
+                self.first_crossing = _crossing_record(t, x, y, segs)
         if self.exclude_arc is not None:
             self.approach.append(closest_approach(x, y, self.exclude_arc))
 
@@ -507,12 +517,37 @@ class SelfIntersectionMonitor:
     def summary(self):
         d = {"self_intersected": self.intersected, "n_steps_observed": len(self.times),
              "n_steps_crossing": len(self.crossing_times), "crossing_intervals": self.intervals()}
+        if self.first_crossing is not None:
+            fc = self.first_crossing
+            d["first_crossing"] = {"t": fc["t"], "points": fc["points"].tolist(),
+                                   "arc_gap": fc["arc_gap"].tolist()}
         if self.approach:
             a = np.asarray(self.approach)
             k = int(np.argmin(a))
             d["closest_approach"] = float(a[k])
             d["closest_approach_time"] = float(self.times[k])
         return d
+
+
+def _crossing_record(t, x, y, segs):
+    """State and geometry of a self-intersection (see :class:`SelfIntersectionMonitor`)."""
+    x, y = _xy(x, y)
+    N = x.size
+    i, j = segs[:, 0], segs[:, 1]
+    ax, ay = x[i], y[i]
+    ex, ey = x[(i + 1) % N] - ax, y[(i + 1) % N] - ay
+    bx, by = x[j], y[j]
+    fx, fy = x[(j + 1) % N] - bx, y[(j + 1) % N] - by
+    den = ex * fy - ey * fx
+    safe = np.where(den == 0, 1.0, den)
+    u = np.where(den == 0, 0.5, ((bx - ax) * fy - (by - ay) * fx) / safe)  # collinear: midpoint
+    u = np.clip(u, 0.0, 1.0)
+    points = np.column_stack([ax + u * ex, ay + u * ey])
+    seg_len = np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
+    gap = j - i
+    arc = np.minimum(gap, N - gap) * seg_len.mean()
+    return {"t": float(t), "x": x.copy(), "y": y.copy(), "segments": segs.copy(),
+            "arc_gap": arc, "points": points}
 
 
 def _runs_linear(mask):

@@ -391,6 +391,7 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     series = _Series(("energy", "length", "crossing", "approach"),
                      None if out is None else os.path.join(out, f"{name}_series.npz"))
     count = [0]
+    crossing_file = None if out is None else os.path.join(out, f"{name}_crossing.npz")
 
     def observe(t, y, system):
         count[0] += 1
@@ -398,7 +399,11 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
             return
         x, yy = system.positions(y)
         n_before = len(monitor.crossing_times)
+        first = monitor.first_crossing
         monitor(t, x, yy)
+        if first is None and monitor.first_crossing is not None and crossing_file:
+            save_npz(crossing_file, _crossing_arrays(monitor.first_crossing),
+                     {"kind": "qsa.first-crossing"})
         series.append(t, energy=system.energy(y), length=system.length(y),
                       crossing=float(len(monitor.crossing_times) > n_before),
                       approach=monitor.approach[-1])
@@ -410,7 +415,9 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     snaps = snaps[(snaps > 0) & (snaps <= t_final)]
     resuming = bool(resume and ck is not None and os.path.isfile(ck))
     if resuming:
-        series.load(_checkpoint_time(ck))
+        t_ck = _checkpoint_time(ck)
+        series.load(t_ck)
+        monitor.first_crossing = _load_crossing(crossing_file, t_ck)
     res = solve_flow(model, sc.initial(N), t_final, N=N, tol=sc.tol, t_eval=snaps,
                      checkpoint=ck, resume=ck if resuming else None, progress=progress,
                      checkpoint_interval=checkpoint_interval, callback=observe)
@@ -444,6 +451,7 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
             "closest_approach": float(np.min(approach[finite])) if finite.any() else None,
             "closest_approach_time": (float(a["t"][finite][np.argmin(approach[finite])])
                                       if finite.any() else None),
+            **_first_crossing_summary(monitor.first_crossing),
         },
         "energy_initial": float(res.energy_steps[0]), "energy_final": float(res.energy[-1]),
         "energy_max_increase": float(dE.max()) if dE.size else 0.0,
@@ -460,8 +468,36 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
         "snap_energy": res.energy,
         "x0": system.positions(system.y0)[0], "y0": system.positions(system.y0)[1],
     }
+    if monitor.first_crossing is not None:  # the state at the first crossing (figures)
+        arrays.update(_crossing_arrays(monitor.first_crossing))
     files = [] if out is None else write_output(out, name, arrays, summary)
     return RunOutput(name, summary, arrays, res, files)
+
+
+def _crossing_arrays(fc):
+    return {"crossing_t": np.array(fc["t"]), "crossing_x": fc["x"], "crossing_y": fc["y"],
+            "crossing_points": fc["points"], "crossing_segments": fc["segments"],
+            "crossing_arc_gap": fc["arc_gap"]}
+
+
+def _load_crossing(path, t_max):
+    """The first-crossing record saved before the checkpoint at ``t_max`` (or None)."""
+    if path is None or not os.path.isfile(path):
+        return None
+    a, _ = load_npz(path)
+    if float(a["crossing_t"]) > t_max * (1 + 1e-12):
+        return None
+    return {"t": float(a["crossing_t"]), "x": a["crossing_x"], "y": a["crossing_y"],
+            "points": a["crossing_points"], "segments": a["crossing_segments"],
+            "arc_gap": a["crossing_arc_gap"]}
+
+
+def _first_crossing_summary(fc):
+    """JSON part of the self-intersection report: where the first crossing was."""
+    if fc is None:
+        return {"first_crossing_points": None, "first_crossing_arc_gap": None}
+    return {"first_crossing_points": fc["points"].tolist(),
+            "first_crossing_arc_gap": fc["arc_gap"].tolist()}
 
 
 def resolution_check(scenario=None, N=None, t_short=2e-3, *, progress=None):

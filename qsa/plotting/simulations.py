@@ -37,6 +37,19 @@ def _reached(times, snap_t, t_reached, n=5):
     return list(snap_t[np.unique(np.linspace(0, snap_t.size - 1, n).round().astype(int))])
 
 
+def _column_times(times, snap_t):
+    """Column times within the run; if one lies past its end, all become log-spaced in it."""
+    times = list(times)
+    t_end = float(snap_t[-1])
+    if all(t is None or t <= t_end for t in times):
+        return times
+    pos = snap_t[snap_t > 0]
+    t_lo = float(pos[0]) if pos.size else t_end
+    k = sum(t is not None for t in times)
+    fill = iter(np.geomspace(t_lo, t_end, k + 2)[1:-1])
+    return [None if t is None else float(next(fill)) for t in times]
+
+
 def _closed(a):
     return np.append(a, a[0])
 
@@ -210,22 +223,35 @@ def cha_figures(arrays, summary, times=None):
 def folding_figure(runs, times=(0.02, 0.3, None)):
     """f:fold: rows = runs (increasing rho), columns = short, mid and final time; energies below.
 
+    A run that crossed itself shows, in its first column, the state at its first
+    self-intersection with the crossing points marked (the paper's "glancing
+    self-intersection in the short-time column").
+
     Parameters
     ----------
     runs : list of (arrays, summary)
     times : sequence
-        Column times; ``None`` means the final state.
+        Column times; ``None`` means the final state. Times beyond a run's end
+        are replaced by log-spaced times between its first snapshot and its end.
     """
     nrows = len(runs)
     fig, axes = new_figure(ncols=len(times), nrows=nrows + 1, size=(3.0, 3.0))
     axes = np.atleast_2d(axes)
     for r, (arrays, summary) in enumerate(runs):
         snap_t = np.asarray(arrays["snap_t"])
-        for c, t in enumerate(times):
+        rho = summary["params"]["rho"]
+        for c, t in enumerate(_column_times(times, snap_t)):
+            ax = axes[r, c]
+            if c == 0 and "crossing_x" in arrays:
+                tc = float(arrays["crossing_t"])
+                plot_shaded_curve(arrays["crossing_x"], arrays["crossing_y"], ax=ax,
+                                  title=f"rho={rho:g}, t={tc:.3g} (crossing)", color=f"C{r}")
+                pts = np.atleast_2d(arrays["crossing_points"])
+                ax.plot(pts[:, 0], pts[:, 1], "o", mfc="none", mec="red", ms=9, mew=1.5)
+                continue
             i = len(snap_t) - 1 if t is None else _nearest(snap_t, t)
-            title = f"rho={summary['params']['rho']:g}, t={snap_t[i]:.3g}"
-            plot_shaded_curve(arrays["snap_x"][i], arrays["snap_y"][i], ax=axes[r, c],
-                              title=title, color=f"C{r}")
+            plot_shaded_curve(arrays["snap_x"][i], arrays["snap_y"][i], ax=ax,
+                              title=f"rho={rho:g}, t={snap_t[i]:.3g}", color=f"C{r}")
     gs = axes[-1, 0].get_gridspec()
     for ax in axes[-1]:
         ax.remove()

@@ -144,3 +144,19 @@ def test_closest_approach_and_self_intersection_monitor():
     assert m.intersected and m.crossing_times == [0.1, 0.2]
     assert m.intervals() == [(0.1, 0.2, 2)]
     assert m.summary()["self_intersected"] is True
+    # where: the figure eight crosses itself at the origin, half the curve apart
+    fc = m.first_crossing
+    assert fc["t"] == 0.1 and fc["x"].shape == (200,)
+    assert np.allclose(fc["points"], 0.0, atol=1e-12)
+    ex, ey = eight
+    L = np.sum(np.hypot(np.diff(ex, append=ex[0]), np.diff(ey, append=ey[0])))
+    assert np.allclose(fc["arc_gap"], 0.5 * L, rtol=0.02)
+    assert m.summary()["first_crossing"]["t"] == 0.1
+
+
+def test_crossing_point_of_two_segments():
+    # a bow tie: segment 0 (0,0)-(1,1) crosses segment 2 (0,1)-(1,0) at (0.5, 0.5)
+    m = SelfIntersectionMonitor()
+    m(1.0, [0.0, 1.0, 0.0, 1.0], [0.0, 1.0, 1.0, 0.0])
+    assert np.allclose(m.first_crossing["points"], [[0.5, 0.5]])
+    assert m.first_crossing["segments"].tolist() == [[0, 2]]

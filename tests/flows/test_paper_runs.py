@@ -2,6 +2,7 @@
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -90,6 +91,38 @@ def test_cha_short_run_monitors_and_writes(tmp_path):
     x, y = out.result.x, out.result.y
     assert np.ptp(chords(x, y)) < 1e-6
     assert chords(x, y).sum() == pytest.approx(out.result.length[-1], rel=1e-6)
+
+
+def test_cha_self_intersection_reported_where_and_kept_on_resume(tmp_path):
+    # strong precompression without repulsion (A0 = 0): the buckling curve crosses itself
+    sc = replace(SMALL_CHA, rho=2.0, A0=0.0)
+    out = run_cha(sc, str(tmp_path), t_final=1e-3, progress=False)
+    si = out.summary["self_intersection"]
+    assert si["detected"] and 0 < si["first_time"] <= si["last_time"] <= 1e-3
+    fc_x, fc_y = out.arrays["crossing_x"], out.arrays["crossing_y"]
+    assert float(out.arrays["crossing_t"]) == si["first_time"]
+    assert polygon_self_intersects(fc_x, fc_y)
+    # the reported points lie on the polygon at its first crossing, between non-neighbours
+    pts = np.asarray(si["first_crossing_points"])
+    assert pts.shape[1] == 2 and len(si["first_crossing_arc_gap"]) == pts.shape[0]
+    d = np.min(np.hypot(fc_x[None, :] - pts[:, :1], fc_y[None, :] - pts[:, 1:]), axis=1)
+    assert np.all(d <= chords(fc_x, fc_y).max())
+    assert min(si["first_crossing_arc_gap"]) > 3 * chords(fc_x, fc_y).mean()
+    name = out.summary["scenario"]
+    assert (tmp_path / f"{name}_crossing.npz").is_file()
+    # resuming past the crossing keeps where it happened
+    more = run_cha(sc, str(tmp_path), t_final=1.5e-3, resume=True, progress=False)
+    assert more.summary["self_intersection"]["first_time"] == si["first_time"]
+    assert more.summary["self_intersection"]["first_crossing_points"] == si[
+        "first_crossing_points"]
+    assert np.array_equal(more.arrays["crossing_x"], fc_x)
+    # the f:fold figure shows the crossing in the short-time column
+    from qsa.plotting.simulations import folding_figure
+
+    fig = folding_figure([(more.arrays, more.summary)])
+    titles = [ax.get_title() for ax in fig.axes]
+    assert "crossing" in titles[0] and "crossing" not in titles[1]
+    assert all(float(t.split("t=")[1].split()[0]) <= 1.5e-3 for t in titles[:3])
 
 
 def test_fold_balance_against_the_discrete_adhesion_energy():
