@@ -187,8 +187,16 @@ class CHAScenario:
     kernel is no longer short against the finger width), no
     self-intersection, closest approach during the buckling transient
     (t ~ 5e-4) 0.055 / 0.042 / 0.030 -- falling with rho, towards the
-    paper's glancing contact at 1.4. N = 600 vs 1200 to t = 2e-3 differ by
-    0.055 l*. The rho = 1.2 end state is a labyrinth, not the paper's single
+    paper's glancing contact at 1.4. Going on in rho (``--rho 1.5 1.6``):
+    closest approach 0.018 at rho = 1.5 (N = 600), and rho = 1.6 reaches
+    contact -- at N = 600 a glancing one (closest approach 8e-4, or a crossing
+    for t = 4.3e-3 ... 4.9e-3 that the repulsion undoes, depending on the step
+    sequence), at N = 1200 a crossing from t = 1.8e-3 on at the 13 points
+    where neighbouring necks meet near the centre (radius 0.26). So from this
+    crenellated start the curve crosses itself for rho ~ 1.6 rather than the
+    paper's 1.4; the self-intersection report gives the time, the crossing
+    points and the state (shown in the f:fold figure). N = 600 vs 1200 to
+    t = 2e-3 differ by 0.055 l*. The rho = 1.2 end state is a labyrinth, not the paper's single
     rolled-up sheet, and it settles by t ~ 0.4 rather than relaxing to 2.5.
     The kernel form itself is as printed: the paper's Table ap:t1 (l* = 1/2) is reproduced
     with ``exp(-|d|^2 / l*^2)`` (differences 0.187 / 0.0396 / 0.0096 for
