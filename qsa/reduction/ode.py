@@ -164,7 +164,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.linalg import solve_banded
+from scipy.linalg.lapack import dgbsv
 from scipy.optimize import brentq
 
 from qsa.discretize import Fourier
@@ -172,6 +172,7 @@ from qsa.equilibria import heteroclinic
 from qsa.equilibria._wells import resolve_well
 from qsa.equilibria.splice import (
     SpliceProfile,
+    _smoothstep,
     close_positions,
     default_cutoff,
 )
@@ -219,24 +220,29 @@ def _fft_size(n):
 _D2_STENCIL = np.array([-205 / 72, 8 / 5, -1 / 5, 8 / 315, -1 / 560])
 
 
-def _stencil_corners(M, c):
-    """The periodic wrap of a symmetric band stencil as ``U @ Wt`` (rank ``2 m``).
+def _folded_band(M, c):
+    """A symmetric periodic band stencil as an ordinary band matrix in folded order.
 
-    Returns ``U`` (M, 2m) (unit columns of the first and last ``m`` rows) and ``Wt``
-    (2m, M) with the stencil weights that wrap around.
+    Ordering the nodes ``0, M-1, 1, M-2, ...`` puts periodic neighbours (also across
+    the seam) at most ``2 m`` apart, so the periodic matrix is banded with half-bandwidth
+    ``2 m`` and no corners. Returns ``perm`` (the order) and the stencil part of the
+    matrix in LAPACK ``gbsv`` layout, shape ``(6 m + 1, M)`` (``2 m`` leading rows of
+    fill-in space).
     """
     m = c.size - 1
-    rows = np.r_[np.arange(m), np.arange(M - m, M)]
-    U = np.zeros((M, 2 * m))
-    U[rows, np.arange(2 * m)] = 1.0
-    Wt = np.zeros((2 * m, M))
-    for q, i in enumerate(rows):
-        for d in range(1, m + 1):
-            if i - d < 0:
-                Wt[q, i - d + M] = c[d]
-            if i + d >= M:
-                Wt[q, i + d - M] = c[d]
-    return U, Wt
+    h = (M + 1) // 2
+    perm = np.empty(M, dtype=int)
+    perm[0::2] = np.arange(h)
+    perm[1::2] = np.arange(M - 1, h - 1, -1)
+    pos = np.empty(M, dtype=int)
+    pos[perm] = np.arange(M)
+    kb = 2 * m
+    ab = np.zeros((3 * kb + 1, M))
+    for d in range(-m, m + 1):
+        i = np.arange(M)
+        j = (i + d) % M
+        ab[2 * kb + pos[i] - pos[j], pos[j]] += c[abs(d)]
+    return perm, np.asfortranarray(ab)
 
 
 @dataclass(frozen=True)
@@ -283,6 +289,7 @@ class FrontODE:
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)
     _fd: tuple = field(init=False, repr=False, compare=False)
+    _inv_ik: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         for name in ("alpha", "kstar", "length", "points_per_width"):
@@ -294,8 +301,10 @@ class FrontODE:
         object.__setattr__(self, "front", front)
         M = _fft_size(max(self.points_per_width * self.length / front.width, 255))
         object.__setattr__(self, "grid", Fourier(M))
-        U, Wt = _stencil_corners(M, _D2_STENCIL)
-        object.__setattr__(self, "_fd", (_D2_STENCIL, U, Wt, U.shape[1]))
+        kk = np.arange(M // 2 + 1)
+        object.__setattr__(self, "_inv_ik", np.where(kk == 0, 0.0, 1 / (2j * np.pi * np.maximum(
+            kk, 1)))[:, None])
+        object.__setattr__(self, "_fd", _folded_band(M, _D2_STENCIL))
         if self.beta is not None and not (np.isfinite(self.beta) and self.beta >= 0):
             raise ValueError(f"beta must be non-negative, got {self.beta!r}")
         if self.L_star is None:
@@ -330,6 +339,63 @@ class FrontODE:
             raise ValueError("p must increase strictly and span less than the length")
         return p
 
+    def _cut_front(self, prof, x):
+        """``SpliceProfile.cut_front`` (values, first, second derivative) at ``x``.
+
+        For the quartic well the front is logistic, so one exponential gives all
+        three (``q = e^{-lambda |x|} / (1 + e^{-lambda |x|})``: ``psi_h - kstar H(x) =
+        -+ kstar q``, ``psi_h' = lambda kstar q (1 - q)``, ``psi_h'' = -+ lambda^2
+        kstar q (1 - q) (1 - 2 q)``), and the cutoff is evaluated only where it acts
+        (``|x| > l1``). Other wells use the profile's own evaluation.
+        """
+        front = self.front
+        if not front.closed_form:
+            return prof.cut_front(x)
+        k, lam = front.kstar, front.rates[0]
+        r = np.abs(x)
+        pos = x > 0
+        live = r < prof.l2
+        sg = np.where(pos, -k, k) * live  # beyond l2 the cut front is the bare step
+        q = np.exp(-lam * r)
+        q /= 1 + q
+        q1 = q * (1 - q)
+        gap = sg * q
+        v0 = gap + k * pos
+        v1 = (lam * k) * q1 * live
+        v2 = (lam * lam) * sg * q1 * (1 - 2 * q)
+        mid = np.nonzero(live & (r > prof.l1))
+        if mid[0].size:
+            w = prof.l2 - prof.l1
+            S, S1, S2 = _smoothstep((prof.l2 - r[mid]) / w)
+            dchi, d2chi = -np.sign(x[mid]) * S1 / w, S2 / w**2
+            g, d1 = gap[mid], v1[mid]
+            v0[mid] = k * pos[mid] + S * g
+            v1[mid] = dchi * g + S * d1
+            v2[mid] = d2chi * g + 2 * dchi * d1 + S * v2[mid]
+        return v0, v1, v2
+
+    def _cumulative(self, F, twice=None):
+        """``int_0^s F`` (unit period, along axis 0) of periodic columns by one real FFT pair.
+
+        With ``twice`` (column indices), also ``int_0^s int_0^s' F`` of those columns,
+        appended. Same result as ``Fourier.cumulative`` (applied twice).
+        """
+        M = F.shape[0]
+        s = self.grid.s[:, None]
+        Fh = np.fft.rfft(F, axis=0)
+        mean = Fh[0].real / M
+        inv = self._inv_ik
+        Ph = Fh * inv
+        if twice is not None:
+            Ph = np.concatenate([Ph, Ph[:, twice] * inv], axis=1)
+        P = np.fft.irfft(Ph, n=M, axis=0)
+        n = F.shape[1]
+        out = P[:, :n] - P[0, :n] + mean * s
+        if twice is None:
+            return out
+        P1, Q, mt = P[:, twice], P[:, n:], mean[twice]
+        return out, Q - Q[0] - P1[0] * s + 0.5 * mt * s**2
+
     def _fields(self, p, cutoff=None, L=None):
         """Everything on the quadrature grid (``sigma = L s``) from one evaluation of the fronts."""
         L = self.length if L is None else float(L)
@@ -339,25 +405,33 @@ class FrontODE:
         grid = self.grid
         s = L * grid.s
         y = prof.local(s)
-        m = prof.a.size
-        v0, v1, v2 = prof.cut_front(np.concatenate([y + prof.a, y - prof.a], axis=1))
-        psi, d1, d2 = (np.sum(v[:, :m] - v[:, m:], axis=1) for v in (v0, v1, v2))
-        dpsi = np.empty((s.size, 2 * m))
-        dpsi[:, 0::2] = -v1[:, :m]
-        dpsi[:, 1::2] = v1[:, m:]
+        M, m = s.size, prof.a.size
+        X = np.empty((M, 2 * m))  # columns up_1, down_1, up_2, ... (the order of p)
+        X[:, 0::2] = y + prof.a
+        X[:, 1::2] = y - prof.a
+        v0, v1, v2 = self._cut_front(prof, X)
+        sgn = np.tile([1.0, -1.0], m)  # psi_N = sum up - sum down
+        psi, d1, d2 = v0 @ sgn, v1 @ sgn, v2 @ sgn
+        dpsi = -sgn * v1
         w = L * grid.weights
+        out = {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "n": np.size(p), "L": L}
+        if self.beta is None:  # fixed length: no d/dL
+            cum = L * self._cumulative(np.column_stack([psi, dpsi]))
+            out["theta"], out["Theta"] = cum[:, 0], cum[:, 1:]
+            return out
         # d/dL at fixed p moves the periodic images: y = (sigma - c) - k L, dy/dL = -k
         # psi_L jumps at the seam sigma = L ~ 0; g = psi_L + (sigma/L) psi' is smooth
-        k = np.rint((s[:, None] - prof.c - y) / L)
+        k = np.repeat(np.rint((s[:, None] - prof.c - y) / L), 2, axis=1) * sgn
         x = s / L
-        g = -np.sum(k * (v1[:, :m] - v1[:, m:]), axis=1) + x * d1
-        dg = -np.sum(k * (v2[:, :m] - v2[:, m:]), axis=1) + d1 / L + x * d2
-        cum = L * grid.cumulative(np.column_stack([psi, dpsi, g]))  # one FFT pair
+        g = -(k * v1).sum(axis=1) + x * d1
+        dg = -(k * v2).sum(axis=1) + d1 / L + x * d2
+        F = np.empty((M, 2 * m + 2))
+        F[:, 0], F[:, 1:-1], F[:, -1] = psi, dpsi, g
+        cum = L * self._cumulative(F)
         theta, Theta = cum[:, 0], cum[:, 1:-1]
         Theta_L = cum[:, -1] - x * psi + theta / L  # int_0^sigma psi_L, pointwise
-        return {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "theta": theta,
-                "Theta": Theta, "n": np.size(p), "L": L, "g": g, "dg": dg,
-                "Theta_L": Theta_L}
+        out.update(theta=theta, Theta=Theta, g=g, dg=dg, Theta_L=Theta_L)
+        return out
 
     def _length_derivatives(self, f):
         """``dE_facet/dL`` and ``dC/dL`` at fixed ``p`` (shape (3,)).
@@ -402,46 +476,42 @@ class FrontODE:
         """Newton step ``delta`` and the corrected residual (see :meth:`slow_correction`).
 
         ``H = -alpha^2 d^2 + W''(psi_N)`` with the periodic 8th-order central difference
-        ``d^2`` on the quadrature grid (banded, half-bandwidth 4). The bordered system
+        ``d^2`` on the quadrature grid: a band matrix (half-bandwidth 8) once the nodes
+        are taken in folded order (:func:`_folded_band`). The bordered system
         ``[[H, B], [B^T, 0]] (delta, mu) = (-R, 0)``, ``B = [d psi_N / d p, 1]``, is
-        solved by one banded LU of ``H`` without its periodic corners, the corners
-        (rank 8) and ``B`` (rank 2N + 1) forming a small Schur complement: O(M (2N + 9))
-        per evaluation instead of the dense ``O(M^3)`` (:meth:`_correction_dense`, the
-        spectral reference; the two agree to the difference error, ~1e-7 of the force).
-        ``H delta = -R - B mu`` then gives the corrected residual without applying
-        ``d^2`` again: ``R(psi + delta) = N(delta) - B mu``,
+        solved by one banded LU of ``H`` and the Schur complement ``B^T H^{-1} B``
+        (size 2N + 1): O(M (2N + 2)) per evaluation instead of the dense ``O(M^3)`` of
+        :meth:`_correction_dense` (the spectral reference; they agree to the difference
+        error, ~1e-7 of the force). ``H delta = -R - B mu`` then gives the corrected
+        residual without applying ``d^2`` again: ``R(psi + delta) = N(delta) - B mu``,
         ``N(delta) = W'(psi + delta) - W'(psi) - W''(psi) delta``.
         """
         psi, W, a2 = f["psi"], self.front.well, self.alpha**2
         M = psi.size
-        c, U, Wt, nu = self._fd
-        scale = -a2 * (M / f["L"]) ** 2  # -alpha^2 d^2 = scale * (unit-spacing stencil)
-        m = c.size - 1
+        perm, band = self._fd
+        kb = (band.shape[0] - 1) // 3
         d2W = W.d2W(psi)
-        ab = np.empty((2 * m + 1, M))
-        ab[:] = (scale * np.concatenate([c[:0:-1], c]))[:, None]
-        ab[m] += d2W
         dW = W.dW(psi)
         R = -a2 * f["d2"] + dW
+        ab = (-a2 * (M / f["L"]) ** 2) * band  # -alpha^2 d^2, unit-spacing stencil scaled
+        ab[2 * kb] += d2W[perm]
         nb = f["dpsi"].shape[1] + 1
-        rhs = np.empty((M, 1 + nu + nb))
-        rhs[:, 0] = -R
-        rhs[:, 1:1 + nu] = U
-        rhs[:, 1 + nu:-1] = f["dpsi"]
+        rhs = np.empty((M, 1 + nb), order="F")
+        rhs[:, 0] = -R[perm]
+        rhs[:, 1:-1] = f["dpsi"][perm]
         rhs[:, -1] = 1.0
-        X = solve_banded((m, m), ab, rhs, overwrite_ab=True, check_finite=False)
-        Fm = np.empty((nu + nb, M))
-        Fm[:nu] = scale * Wt
-        Fm[nu:] = rhs[:, 1 + nu:].T
-        S = Fm @ X[:, 1:]
-        S[np.arange(nu), np.arange(nu)] += 1.0  # corner unknowns z = Wt delta: Wt delta - z = 0
+        _, _, X, info = dgbsv(kb, kb, ab, rhs, overwrite_ab=True, overwrite_b=True)
+        if info != 0:  # H singular: the dense reference copes (least squares)
+            return self._correction_dense(f)
+        B = np.column_stack([f["dpsi"][perm], np.ones(M)])
+        S = B.T @ X[:, 1:]
         try:
-            y = np.linalg.solve(S, Fm @ X[:, 0])
+            mu = np.linalg.solve(S, B.T @ X[:, 0])
         except np.linalg.LinAlgError:
-            y = np.linalg.lstsq(S, Fm @ X[:, 0], rcond=1e-12)[0]
-        delta = X[:, 0] - X[:, 1:] @ y
-        mu = y[nu:]
-        Rc = (W.dW(psi + delta) - dW - d2W * delta) - rhs[:, 1 + nu:] @ mu
+            mu = np.linalg.lstsq(S, B.T @ X[:, 0], rcond=1e-12)[0]
+        delta = np.empty(M)
+        delta[perm] = X[:, 0] - X[:, 1:] @ mu
+        Rc = (W.dW(psi + delta) - dW - d2W * delta) - f["dpsi"] @ mu[:-1] - mu[-1]
         return delta, Rc
 
     def _correction_dense(self, f):
@@ -485,24 +555,28 @@ class FrontODE:
         # d gamma / d p_j = -int_0^sigma n Theta_j. Theta_j = (periodic) + c_j s, so with
         # m = int_0^s n ds' (periodic on a closed curve) and
         # int_0^s s' n ds' = s m - int_0^s m ds', every cumulative integral is of a
-        # periodic function: spectral (Fourier) accuracy, no end corrections.
+        # periodic function: spectral (Fourier) accuracy, no end corrections. One real
+        # FFT pair gives them all.
         theta, Theta, w = f["theta"], f["Theta"], f["w"]
-        L, grid, s = f["L"], self.grid, self.grid.s
-        tau = np.stack([np.cos(theta), np.sin(theta)], axis=1)
-        n = np.stack([tau[:, 1], -tau[:, 0]], axis=1)
-        c = L * f["dpsi"].mean(axis=0)  # Theta_j(L)
-        periodic = Theta - s[:, None] * c
+        L, s = f["L"], self.grid.s
         k = Theta.shape[1]
-        mom = grid.cumulative(np.column_stack([tau, n]))  # (gamma, m) / L
-        gamma, m = L * mom[:, :2], mom[:, 2:]
-        sn = s[:, None] * m - grid.cumulative(m)  # int_0^s s' n ds'
-        cum = grid.cumulative(np.concatenate([n[:, 0:1] * periodic, n[:, 1:2] * periodic],
-                                             axis=1))
-        dgx = -L * (cum[:, :k] + sn[:, 0:1] * c)
-        dgy = -L * (cum[:, k:] + sn[:, 1:2] * c)
-        phi = n[:, 0:1] * dgx + n[:, 1:2] * dgy
-        R = np.column_stack([n[:, 0], n[:, 1], np.sum(gamma * tau, axis=1)])
-        coef = np.linalg.solve(R.T @ (w[:, None] * R), R.T @ (w[:, None] * phi))
+        c = L * f["dpsi"].mean(axis=0)  # Theta_j(L)
+        cs, sn_ = np.cos(theta), np.sin(theta)
+        Y = np.empty((s.size, 4 + 2 * k))
+        Y[:, 0], Y[:, 1], Y[:, 2], Y[:, 3] = cs, sn_, sn_, -cs  # tau, n
+        periodic = Theta - s[:, None] * c
+        np.multiply(sn_[:, None], periodic, out=Y[:, 4:4 + k])
+        np.multiply(-cs[:, None], periodic, out=Y[:, 4 + k:])
+        cum, mm = self._cumulative(Y, twice=[2, 3])  # mm = int_0^s m
+        gx, gy = L * cum[:, 0], L * cum[:, 1]
+        m = cum[:, 2:4]
+        sn = s[:, None] * m - mm  # int_0^s s' n ds'
+        dgx = -L * (cum[:, 4:4 + k] + sn[:, 0:1] * c)
+        dgy = -L * (cum[:, 4 + k:] + sn[:, 1:2] * c)
+        phi = sn_[:, None] * dgx - cs[:, None] * dgy
+        R = np.column_stack([sn_, -cs, gx * cs + gy * sn_])
+        Rw = R.T * w
+        coef = np.linalg.solve(Rw @ R, Rw @ phi)
         return phi - R @ coef
 
     def normal_velocities(self, p, cutoff=None):
