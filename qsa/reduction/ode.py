@@ -715,7 +715,9 @@ class FrontODE:
             Output times (default: the solver's steps).
         rtol, atol, method
             Passed to :func:`scipy.integrate.solve_ivp` (``atol`` default
-            ``1e-9 * width``).
+            ``1e-9 * width``). With a variable length the implicit methods ("Radau",
+            "BDF", "LSODA") get the Jacobian's length column only (one evaluation; the
+            perimeter mode is the only stiff one).
         max_collisions : int
         close : bool
             Project ``p0`` and the positions after each collision onto ``C = 0``.
@@ -744,7 +746,14 @@ class FrontODE:
             if close:
                 p, hist, _ = close_positions(p, self.front, L, cut)
 
-            def rhs(t, y, cut=cut):
+            last = {}  # the latest evaluation (the implicit methods' Jacobian reuses it)
+            count = [0]
+
+            def rhs(t, y, cut=cut, last=last, count=count):
+                key = y.tobytes()
+                if key in last:
+                    return last[key]
+                count[0] += 1
                 q, Lq = (y[:-1], y[-1]) if var else (y, None)
                 try:
                     v = self._velocity(q, cut, L=Lq)
@@ -752,7 +761,22 @@ class FrontODE:
                     v = None
                 # a wild trial stage (fronts overrun near a collision): NaN makes the
                 # Runge-Kutta error estimate reject the step and shrink it
-                return v if v is not None and np.all(np.isfinite(v)) else np.full(y.size, np.nan)
+                if v is None or not np.all(np.isfinite(v)):
+                    v = np.full(y.size, np.nan)
+                last.clear()
+                last[key] = v
+                return v
+
+            def jac(t, y, cut=cut, rhs=rhs, count=count):
+                # Only the length column: the stiffness of the variable-length flow is the
+                # perimeter mode (eigenvalue ~ -2 pi beta / R), the positions are slow
+                # (|dF/dp| ~ 1/t_c); a difference Jacobian would cost 2N + 1 evaluations.
+                f0 = rhs(t, y)
+                h = 1e-7 * y[-1]
+                count[0] += 1
+                J = np.zeros((y.size, y.size))
+                J[:, -1] = (self._velocity(y[:-1], cut, L=y[-1] + h) - f0) / h
+                return J
 
             def gap_event(t, y, L=L):
                 q, Lq = (y[:-1], y[-1]) if var else (y, L)
@@ -762,9 +786,10 @@ class FrontODE:
             gap_event.direction = -1
             te = None if t_eval is None else t_eval[(t_eval >= t0) & (t_eval <= t_final)]
             y0 = np.append(p, L) if var else p
+            implicit = var and method in ("Radau", "BDF", "LSODA")
             sol = solve_ivp(rhs, (t0, t_final), y0, method=method, t_eval=te, rtol=rtol,
-                            atol=atol, events=gap_event)
-            nfev += sol.nfev
+                            atol=atol, events=gap_event, **({"jac": jac} if implicit else {}))
+            nfev += count[0]
             Y = np.asarray(sol.y, dtype=float).reshape(y0.size, -1).T
             Ls = Y[:, -1] if var else np.full(Y.shape[0], L)
             segments.append(_Segment(np.asarray(sol.t, dtype=float), Y[:, : p.size],
@@ -845,6 +870,7 @@ class FrontODEResult:
         0 reached ``t_final``; 1 stopped after a collision left < 4 fronts; -1 failed.
     message : str
     nfev : int
+        Evaluations of ``F`` (also those for the Jacobian of an implicit method).
     elapsed : float
         Wall time in seconds.
     """
