@@ -236,7 +236,7 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
 
 
 def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min, fractions,
-                     time_dae, wide, rtol=1e-5, correction=None):
+                     time_dae, wide, rtol=1e-4, correction=None):
     """Collision time and position errors of the variable-length reduction.
 
     ``wide`` marks the DAE snapshots at which every gap is at least ``2 d_c``.
