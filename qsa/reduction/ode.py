@@ -204,7 +204,8 @@ def collision_sensitivity(eps, t, t_c, lam):
 
 def _fft_size(n):
     """Smallest odd ``M >= n`` with no prime factor above 7 (fast FFTs; odd: no Nyquist)."""
-    M = int(n) + 1 - int(n) % 2
+    M = int(np.ceil(n))
+    M += 1 - M % 2
     while True:
         r = M
         for q in (3, 5, 7):
@@ -363,15 +364,16 @@ class FrontODE:
         v0 = gap + k * pos
         v1 = (lam * k) * q1 * live
         v2 = (lam * lam) * sg * q1 * (1 - 2 * q)
-        mid = np.nonzero(live & (r > prof.l1))
-        if mid[0].size:
+        mid = np.flatnonzero(live & (r > prof.l1))
+        if mid.size:
             w = prof.l2 - prof.l1
-            S, S1, S2 = _smoothstep((prof.l2 - r[mid]) / w)
-            dchi, d2chi = -np.sign(x[mid]) * S1 / w, S2 / w**2
-            g, d1 = gap[mid], v1[mid]
-            v0[mid] = k * pos[mid] + S * g
-            v1[mid] = dchi * g + S * d1
-            v2[mid] = d2chi * g + 2 * dchi * d1 + S * v2[mid]
+            f0, f1, f2 = v0.reshape(-1), v1.reshape(-1), v2.reshape(-1)  # views
+            S, S1, S2 = _smoothstep((prof.l2 - r.reshape(-1)[mid]) / w)
+            dchi, d2chi = -np.sign(x.reshape(-1)[mid]) * S1 / w, S2 / w**2
+            g, d1 = gap.reshape(-1)[mid], f1[mid]
+            f0[mid] = f0[mid] + (S - 1) * g
+            f1[mid] = dchi * g + S * d1
+            f2[mid] = d2chi * g + 2 * dchi * d1 + S * f2[mid]
         return v0, v1, v2
 
     def _cumulative(self, F, twice=None):
@@ -560,7 +562,7 @@ class FrontODE:
         theta, Theta, w = f["theta"], f["Theta"], f["w"]
         L, s = f["L"], self.grid.s
         k = Theta.shape[1]
-        c = L * f["dpsi"].mean(axis=0)  # Theta_j(L)
+        c = (L / s.size) * f["dpsi"].sum(axis=0)  # Theta_j(L)
         cs, sn_ = np.cos(theta), np.sin(theta)
         Y = np.empty((s.size, 4 + 2 * k))
         Y[:, 0], Y[:, 1], Y[:, 2], Y[:, 3] = cs, sn_, sn_, -cs  # tau, n
@@ -648,8 +650,10 @@ class FrontODE:
             dE = np.append(dE, dEL)
             A = np.column_stack([A, np.append(dCL, 0.0)])
             n += 1
-        K = np.block([[G, A.T], [A, np.zeros((4, 4))]])
-        rhs = np.concatenate([-dE, np.zeros(4)])
+        K = np.zeros((n + 4, n + 4))
+        K[:n, :n], K[:n, n:], K[n:, :n] = G, A.T, A
+        rhs = np.zeros(n + 4)
+        rhs[:n] = -dE
         try:
             sol = np.linalg.solve(K, rhs)
         except np.linalg.LinAlgError:  # degenerate constraints (e.g. a symmetric lens)
