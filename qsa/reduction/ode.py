@@ -511,8 +511,12 @@ class FrontODE:
             mu = np.linalg.solve(S, B.T @ X[:, 0])
         except np.linalg.LinAlgError:
             mu = np.linalg.lstsq(S, B.T @ X[:, 0], rcond=1e-12)[0]
+        d = X[:, 0] - X[:, 1:] @ mu
+        # B^T delta = 0 holds to the solve's round-off, which the near kernel of H
+        # (the translation modes) amplifies to ~1e-9 relative: project it out exactly
+        d -= B @ np.linalg.solve(B.T @ B, B.T @ d)
         delta = np.empty(M)
-        delta[perm] = X[:, 0] - X[:, 1:] @ mu
+        delta[perm] = d
         Rc = (W.dW(psi + delta) - dW - d2W * delta) - f["dpsi"] @ mu[:-1] - mu[-1]
         return delta, Rc
 
