@@ -137,17 +137,24 @@ quasi-steady profile there, which strengthens the attraction. Evaluating the
 reduced force with the DAE state's own residual removes most of it (``eps_R``
 0.24 ... 1.7%). One Newton step from the splice (:meth:`slow_correction`,
 ``correction="newton"``) predicts the lift (+2.5 ... +9.3%) and gives
-``eps_N`` = 0.08 ... 1.1%; the remaining ~1% is in the metric (the splice's
-tangent fields). Collision times with ``correction="newton"``: short facet
+``eps_N`` = 0.08 ... 1.1%. The remaining ~1% is *not* removed by slaving the
+metric's tangent fields to first order: with ``d(psi_N + delta)/dp_j`` (they
+differ from ``d psi_N/dp_j`` by ~3e-4) in ``G`` the short-facet ``t_c`` moves the
+wrong way (fixed length +0.42% instead of +0.29% against the DAE; +0.75% with the
+force and the closure also from ``psi_N + delta``), the triangle's barely (-0.89%
+instead of -0.95%); so this is not done. Collision times with ``correction="newton"``: short facet
 0.06414 (fixed length) against 0.06394 (DAE, beta = 500, N = 2400), +0.3%
 (uncorrected +2.4%); with ``beta = 5`` and the variable length 0.06352
 against 0.06331, +0.3% (uncorrected +2.4%). Triangle (fixed length, DAE
 beta = 500, N = 1200: 2.7929): 2.7665 (-0.9%) against 2.7727 (-0.7%)
 uncorrected: its late-time rate error halves (1.2% -> 0.55% at ``t/t_c =
 0.95``), but an early +1% (``t/t_c ~ 0.1``, rates 20x slower than late) that
-the correction does not touch dominates its collision time. The correction
-costs a dense ``M x M`` solve per evaluation (~5-8x the uncorrected ODE's CPU
-time). ``qsa reproduce fronts --scenario short-facet --correction newton`` (beta =
+the correction does not touch dominates its collision time. The correction is
+a banded solve (:meth:`_correction`: 8th-order differences for ``d^2``, nodes in
+folded order, Schur complement on the ``2N + 1`` translation and turning modes;
+it agrees with the dense spectral solve to ~1e-7 of the force) and costs
+1.2-1.4x the uncorrected ODE's CPU time (the dense ``M x M`` solve cost 5-8x).
+``qsa reproduce fronts --scenario short-facet --correction newton`` (beta =
 5, N = 1200): variable length ``t_c`` +0.29% (uncorrected +2.38%), positions
 within 0.08%, 0.15%, 0.43% of the smallest facet up to 0.9, 0.95, 0.99 ``t_c``
 (uncorrected 0.84%, 1.68%, 6.26%); fixed length +1.26% (uncorrected +3.35%).
@@ -156,6 +163,17 @@ extrapolated 2.745): variable length 2.7479 (-0.18%; uncorrected 2.7541,
 +0.05%), positions 1.3% (uncorrected 0.15%) at 0.99 ``t_c``: there the
 correction is within the DAE's own discretization uncertainty and gains
 nothing measurable, hence it is an option, off by default.
+
+*Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision;
+DAE at N = 2400: triangle 3.0 s, short facet 1.4 s, BDF2 tol 1e-6). Fixed length
+(RK45, rtol 1e-4, 100-150 evaluations of ~0.5 ms): triangle 0.077 s uncorrected,
+0.101 s with the Newton correction (40x and 30x faster than the DAE at N = 2400),
+short facet 0.058 and 0.080 s (25x, 18x). Variable length (Radau, rtol 1e-4, the
+Jacobian's length column only, 210-300 evaluations): triangle 0.21 and 0.24 s
+(15x, 13x), short facet 0.16 and 0.20 s (9x, 7x). The ODE's evaluation count is
+set by the finite-time approach to the collision (``d' ~ -c exp(-lambda d)``;
+step sizes shrink geometrically), its cost per evaluation by ``O(M N)`` array
+work at ``M ~ 300`` nodes.
 """
 
 from __future__ import annotations
@@ -274,8 +292,9 @@ class FrontODE:
         ``"newton"``: evaluate the force ``dE/dp_j`` with the residual of the
         profile corrected by one Newton step towards the slow manifold
         (:meth:`slow_correction`) instead of the splice's own residual; removes
-        most of the rate error of closing pairs (see "Accuracy"). Costs a dense
-        solve of size ``M`` (quadrature nodes) per evaluation.
+        most of the rate error of closing pairs (see "Accuracy"). Costs one banded
+        solve of size ``M`` (quadrature nodes) per evaluation, ~1.2-1.4x the
+        uncorrected ODE.
     """
 
     alpha: float
