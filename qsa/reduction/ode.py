@@ -425,7 +425,8 @@ class FrontODE:
         prof = SpliceProfile(self.front, p, L, cut)
         grid = self.grid
         s = L * grid.s
-        y = prof.local(s)
+        y = s[:, None] - prof.c
+        y -= L * np.floor(y / L + 0.5)  # prof.local(s): wrapped into [-L/2, L/2)
         M, m = s.size, prof.a.size
         X = np.empty((M, 2 * m))  # columns up_1, down_1, up_2, ... (the order of p)
         X[:, 0::2] = y + prof.a
