@@ -1,12 +1,16 @@
 """Cost of the front-position ODE against the DAE faceting flow over the same interval.
 
-For each scenario of ``qsa reproduce fronts`` and each DAE resolution N, runs
-:func:`qsa.reduction.compare.compare_fronts` (DAE: ``solve_flow``, BDF2, tol 1e-6,
-stopped at the first pair annihilation; ODE: RK45, rtol 1e-4, stopped at its first
-collision) and prints CPU seconds (``time.process_time``, robust on a shared
-machine), steps / right-hand-side evaluations, the speedup, and the collision times.
-The DAE collision time converges like N^-2 (second-order differences), so the
-DAE needs N ~ 2400 to be within ~0.3% of its limit; the ODE has no such cost.
+For each scenario of ``qsa reproduce fronts`` the DAE (``solve_flow``, BDF2, tol 1e-6,
+stopped at the first pair annihilation; run through
+:func:`qsa.reduction.compare.compare_fronts`) at each resolution N, and the four
+reductions (force correction none / newton, fixed length / variable length with
+beta = 5) stopped at their first collision, with the settings of ``compare_fronts``
+(fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4). Prints CPU
+seconds (``time.process_time``, best of a few ODE runs, robust on a shared machine),
+DAE steps / ODE right-hand-side evaluations (with those of the Jacobian), the
+speedup against the DAE at each N and the collision times. The DAE collision time
+converges like N^-2 (second-order differences), so the DAE needs N ~ 2400 to be within
+~0.3% of its limit; the ODE has no such cost.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_reduction.py [N ...]``
 (default N = 1200 2400).
@@ -22,32 +26,44 @@ import numpy as np
 from qsa.reduction.compare import SCENARIOS, compare_fronts, scenario_splice
 from qsa.reduction.ode import FrontODE
 
+VARIANTS = [(None, False), ("newton", False), (None, True), ("newton", True)]
 
-def ode_cpu(scenario, repeat=5):
-    """Best-of-``repeat`` CPU time of the ODE alone (first collision), and its nfev."""
+
+def ode_cpu(scenario, correction=None, variable=False, repeat=3):
+    """Best-of-``repeat`` CPU time of the ODE alone (to its first collision), nfev, ``t_c``."""
     eq = scenario_splice(scenario)
     p = np.array(eq.params["positions"])
-    ode = FrontODE(0.1, 5.0, eq.params["L"])
-    best, nfev = np.inf, 0
+    ode = FrontODE(0.1, 5.0, eq.params["L"], correction=correction,
+                   beta=5.0 if variable else None)
+    opts = {"rtol": 1e-4, "method": "Radau"} if variable else {"rtol": 1e-4}
+    best = np.inf
     for _ in range(repeat):
         t0 = time.process_time()
-        r = ode.integrate(p, SCENARIOS[scenario].t_final, rtol=1e-4, max_collisions=0)
+        r = ode.integrate(p, SCENARIOS[scenario].t_final, max_collisions=0, **opts)
         best = min(best, time.process_time() - t0)
-        nfev = r.nfev
-    return best, nfev
+    tc = r.first_collision.time if r.events else np.nan
+    return best, r.nfev, tc
 
 
 def main(Ns):
-    print(f"{'scenario':12s} {'N':>5s} {'DAE cpu s':>10s} {'steps':>6s} {'ODE cpu s':>10s} "
-          f"{'nfev':>5s} {'speedup':>8s} {'t_c DAE':>9s} {'t_c ODE':>9s} {'diff %':>7s}")
     for name in SCENARIOS:
-        t_ode, nfev = ode_cpu(name)
+        dae = {}
+        print(f"{name}: DAE (beta = 5)")
+        print(f"  {'N':>5s} {'cpu s':>7s} {'steps':>6s} {'t_c':>9s}")
         for N in Ns:
             s = compare_fronts(name, N=N).summary
-            print(f"{name:12s} {N:5d} {s['time_dae']:10.2f} {s['n_steps_dae']:6d} "
-                  f"{t_ode:10.3f} {nfev:5d} {s['time_dae'] / t_ode:8.0f} "
-                  f"{s['collision_dae']:9.5f} {s['collision_ode']:9.5f} "
-                  f"{100 * s['collision_rel_diff']:7.2f}")
+            dae[N] = (s["time_dae"], s["collision_dae"])
+            print(f"  {N:5d} {s['time_dae']:7.2f} {s['n_steps_dae']:6d} "
+                  f"{s['collision_dae']:9.5f}")
+        head = "".join(f" {'x DAE ' + str(N):>11s}" for N in Ns)
+        diff = "".join(f" {'%/' + str(N):>7s}" for N in Ns)
+        print(f"  {'reduction':22s} {'cpu s':>7s} {'nfev':>5s}{head} {'t_c':>9s}{diff}")
+        for correction, variable in VARIANTS:
+            cpu, nfev, tc = ode_cpu(name, correction, variable)
+            label = f"{correction or 'none'}, {'variable' if variable else 'fixed'} L"
+            sp = "".join(f" {dae[N][0] / cpu:11.0f}" for N in Ns)
+            rel = "".join(f" {100 * (tc / dae[N][1] - 1):+7.2f}" for N in Ns)
+            print(f"  {label:22s} {cpu:7.3f} {nfev:5d}{sp} {tc:9.5f}{rel}")
 
 
 if __name__ == "__main__":

@@ -145,7 +145,8 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         ``speedup``, ``n_steps_dae``, ``nfev_ode``, ``N``, ``facet_min``, and
         ``variable_length``: the same numbers for the reduction with the length as an
         unknown (``FrontODE(beta=beta)``, Radau; positions compared as ``p``, which
-        differ from the crossings by the neighbours' tails only).
+        differ from the crossings by the neighbours' tails only; also with
+        ``max_error_separated`` and ``separated_until``).
     """
     from qsa import FiniteDifference
     from qsa.flows import FacetingFlow, solve_flow
@@ -206,12 +207,13 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
             cs = Qs + ((cs - Qs + 0.5 * L) % L - 0.5 * L)
             cs -= cs.mean(axis=1, keepdims=True)
             rescaled = float(np.max(np.abs(cs - dae[: cs.shape[0]])) / facet_min)
-    variable = _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min,
-                                fractions, time_dae, correction=correction)
     # validity of the splice manifold: both fronts of every pair still separated
     dc = ode.collision_distance
     gaps_dae = np.min(np.abs(np.diff(np.sort(dae, axis=1), axis=1)), axis=1)
-    sep = before & (gaps_dae >= 2 * dc)
+    wide = gaps_dae >= 2 * dc
+    sep = before & wide
+    variable = _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min,
+                                fractions, time_dae, wide, correction=correction)
     summary = {
         "scenario": sc.name, "description": sc.description, "alpha": alpha, "kstar": kstar,
         "beta": beta, "N": int(N), "L": float(L), "facet_min": facet_min,
@@ -234,8 +236,11 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
 
 
 def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min, fractions,
-                     time_dae, rtol=1e-5, correction=None):
-    """Collision time and position errors of the variable-length reduction."""
+                     time_dae, wide, rtol=1e-4, correction=None):
+    """Collision time and position errors of the variable-length reduction.
+
+    ``wide`` marks the DAE snapshots at which every gap is at least ``2 d_c``.
+    """
     ode = FrontODE(alpha, kstar, L, beta=beta, correction=correction)
     start = time.process_time()
     sol = ode.integrate(p0, t_final, rtol=rtol, method="Radau", max_collisions=0)
@@ -253,9 +258,12 @@ def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_m
     for f in fractions:
         sel = before & (t <= f * tc_dae)
         error_at[str(f)] = float(np.max(error[sel])) if np.any(sel) else np.nan
+    sep = before & wide
     return {"beta": beta, "collision_ode": float(tc),
             "collision_rel_diff": float(abs(tc - tc_dae) / tc_dae), "error_at": error_at,
             "max_error": float(np.max(error[before])) if np.any(before) else np.nan,
+            "max_error_separated": float(np.max(error[sep])) if np.any(sep) else np.nan,
+            "separated_until": float(t[sep][-1] / tc_dae) if np.any(sep) else np.nan,
             "time_ode": cpu, "speedup": time_dae / cpu, "nfev_ode": int(sol.nfev),
             "L_change": float(sol.segments[0].L[-1] - L)}
 

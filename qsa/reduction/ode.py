@@ -137,17 +137,24 @@ quasi-steady profile there, which strengthens the attraction. Evaluating the
 reduced force with the DAE state's own residual removes most of it (``eps_R``
 0.24 ... 1.7%). One Newton step from the splice (:meth:`slow_correction`,
 ``correction="newton"``) predicts the lift (+2.5 ... +9.3%) and gives
-``eps_N`` = 0.08 ... 1.1%; the remaining ~1% is in the metric (the splice's
-tangent fields). Collision times with ``correction="newton"``: short facet
+``eps_N`` = 0.08 ... 1.1%. The remaining ~1% is *not* removed by slaving the
+metric's tangent fields to first order: with ``d(psi_N + delta)/dp_j`` (they
+differ from ``d psi_N/dp_j`` by ~3e-4) in ``G`` the short-facet ``t_c`` moves the
+wrong way (fixed length +0.42% instead of +0.29% against the DAE; +0.75% with the
+force and the closure also from ``psi_N + delta``), the triangle's barely (-0.89%
+instead of -0.95%); so this is not done. Collision times with ``correction="newton"``: short facet
 0.06414 (fixed length) against 0.06394 (DAE, beta = 500, N = 2400), +0.3%
 (uncorrected +2.4%); with ``beta = 5`` and the variable length 0.06352
 against 0.06331, +0.3% (uncorrected +2.4%). Triangle (fixed length, DAE
 beta = 500, N = 1200: 2.7929): 2.7665 (-0.9%) against 2.7727 (-0.7%)
 uncorrected: its late-time rate error halves (1.2% -> 0.55% at ``t/t_c =
 0.95``), but an early +1% (``t/t_c ~ 0.1``, rates 20x slower than late) that
-the correction does not touch dominates its collision time. The correction
-costs a dense ``M x M`` solve per evaluation (~5-8x the uncorrected ODE's CPU
-time). ``qsa reproduce fronts --scenario short-facet --correction newton`` (beta =
+the correction does not touch dominates its collision time. The correction is
+a banded solve (:meth:`_correction`: 8th-order differences for ``d^2``, nodes in
+folded order, Schur complement on the ``2N + 1`` translation and turning modes;
+it agrees with the dense spectral solve to ~1e-7 of the force) and costs
+1.2-1.4x the uncorrected ODE's CPU time (the dense ``M x M`` solve cost 5-8x).
+``qsa reproduce fronts --scenario short-facet --correction newton`` (beta =
 5, N = 1200): variable length ``t_c`` +0.29% (uncorrected +2.38%), positions
 within 0.08%, 0.15%, 0.43% of the smallest facet up to 0.9, 0.95, 0.99 ``t_c``
 (uncorrected 0.84%, 1.68%, 6.26%); fixed length +1.26% (uncorrected +3.35%).
@@ -156,6 +163,17 @@ extrapolated 2.745): variable length 2.7479 (-0.18%; uncorrected 2.7541,
 +0.05%), positions 1.3% (uncorrected 0.15%) at 0.99 ``t_c``: there the
 correction is within the DAE's own discretization uncertainty and gains
 nothing measurable, hence it is an option, off by default.
+
+*Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision;
+DAE at N = 2400: triangle 3.0 s, short facet 1.4 s, BDF2 tol 1e-6). Fixed length
+(RK45, rtol 1e-4, 100-150 evaluations of ~0.5 ms): triangle 0.077 s uncorrected,
+0.101 s with the Newton correction (40x and 30x faster than the DAE at N = 2400),
+short facet 0.058 and 0.080 s (25x, 18x). Variable length (Radau, rtol 1e-4, the
+Jacobian's length column only, 210-300 evaluations): triangle 0.21 and 0.24 s
+(15x, 13x), short facet 0.16 and 0.20 s (9x, 7x). The ODE's evaluation count is
+set by the finite-time approach to the collision (``d' ~ -c exp(-lambda d)``;
+step sizes shrink geometrically), its cost per evaluation by ``O(M N)`` array
+work at ``M ~ 300`` nodes.
 """
 
 from __future__ import annotations
@@ -164,6 +182,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.linalg.lapack import dgbsv
 from scipy.optimize import brentq
 
 from qsa.discretize import Fourier
@@ -171,6 +190,7 @@ from qsa.equilibria import heteroclinic
 from qsa.equilibria._wells import resolve_well
 from qsa.equilibria.splice import (
     SpliceProfile,
+    _smoothstep,
     close_positions,
     default_cutoff,
 )
@@ -200,9 +220,48 @@ def collision_sensitivity(eps, t, t_c, lam):
     return eps / lam * x / (1 - x)
 
 
-def _odd(n):
-    n = int(n)
-    return n + 1 - n % 2
+def _fft_size(n):
+    """Smallest odd ``M >= n`` with no prime factor above 7 (fast FFTs; odd: no Nyquist)."""
+    M = int(np.ceil(n))
+    M += 1 - M % 2
+    while True:
+        r = M
+        for q in (3, 5, 7):
+            while r % q == 0:
+                r //= q
+        if r == 1:
+            return M
+        M += 2
+
+
+#: Periodic central differences for ``d^2/dx^2`` at unit spacing, 8th order: weights of
+#: the offsets 0, +-1, ..., +-4.
+_D2_STENCIL = np.array([-205 / 72, 8 / 5, -1 / 5, 8 / 315, -1 / 560])
+
+
+def _folded_band(M, c):
+    """A symmetric periodic band stencil as an ordinary band matrix in folded order.
+
+    Ordering the nodes ``0, M-1, 1, M-2, ...`` puts periodic neighbours (also across
+    the seam) at most ``2 m`` apart, so the periodic matrix is banded with half-bandwidth
+    ``2 m`` and no corners. Returns ``perm`` (the order) and the stencil part of the
+    matrix in LAPACK ``gbsv`` layout, shape ``(6 m + 1, M)`` (``2 m`` leading rows of
+    fill-in space).
+    """
+    m = c.size - 1
+    h = (M + 1) // 2
+    perm = np.empty(M, dtype=int)
+    perm[0::2] = np.arange(h)
+    perm[1::2] = np.arange(M - 1, h - 1, -1)
+    pos = np.empty(M, dtype=int)
+    pos[perm] = np.arange(M)
+    kb = 2 * m
+    ab = np.zeros((3 * kb + 1, M))
+    for d in range(-m, m + 1):
+        i = np.arange(M)
+        j = (i + d) % M
+        ab[2 * kb + pos[i] - pos[j], pos[j]] += c[abs(d)]
+    return perm, np.asfortranarray(ab)
 
 
 @dataclass(frozen=True)
@@ -233,8 +292,9 @@ class FrontODE:
         ``"newton"``: evaluate the force ``dE/dp_j`` with the residual of the
         profile corrected by one Newton step towards the slow manifold
         (:meth:`slow_correction`) instead of the splice's own residual; removes
-        most of the rate error of closing pairs (see "Accuracy"). Costs a dense
-        solve of size ``M`` (quadrature nodes) per evaluation.
+        most of the rate error of closing pairs (see "Accuracy"). Costs one banded
+        solve of size ``M`` (quadrature nodes) per evaluation, ~1.2-1.4x the
+        uncorrected ODE.
     """
 
     alpha: float
@@ -248,6 +308,8 @@ class FrontODE:
     correction: str = None
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)
+    _fd: tuple = field(init=False, repr=False, compare=False)
+    _inv_ik: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         for name in ("alpha", "kstar", "length", "points_per_width"):
@@ -257,8 +319,12 @@ class FrontODE:
         well, kstar = resolve_well(self.well, self.kstar)
         front = heteroclinic(self.alpha, well, kstar)
         object.__setattr__(self, "front", front)
-        M = _odd(max(self.points_per_width * self.length / front.width, 255))
+        M = _fft_size(max(self.points_per_width * self.length / front.width, 255))
         object.__setattr__(self, "grid", Fourier(M))
+        kk = np.arange(M // 2 + 1)
+        object.__setattr__(self, "_inv_ik", np.where(kk == 0, 0.0, 1 / (2j * np.pi * np.maximum(
+            kk, 1)))[:, None])
+        object.__setattr__(self, "_fd", _folded_band(M, _D2_STENCIL))
         if self.beta is not None and not (np.isfinite(self.beta) and self.beta >= 0):
             raise ValueError(f"beta must be non-negative, got {self.beta!r}")
         if self.L_star is None:
@@ -293,6 +359,64 @@ class FrontODE:
             raise ValueError("p must increase strictly and span less than the length")
         return p
 
+    def _cut_front(self, prof, x):
+        """``SpliceProfile.cut_front`` (values, first, second derivative) at ``x``.
+
+        For the quartic well the front is logistic, so one exponential gives all
+        three (``q = e^{-lambda |x|} / (1 + e^{-lambda |x|})``: ``psi_h - kstar H(x) =
+        -+ kstar q``, ``psi_h' = lambda kstar q (1 - q)``, ``psi_h'' = -+ lambda^2
+        kstar q (1 - q) (1 - 2 q)``), and the cutoff is evaluated only where it acts
+        (``|x| > l1``). Other wells use the profile's own evaluation.
+        """
+        front = self.front
+        if not front.closed_form:
+            return prof.cut_front(x)
+        k, lam = front.kstar, front.rates[0]
+        r = np.abs(x)
+        pos = x > 0
+        live = r < prof.l2
+        sg = np.where(pos, -k, k) * live  # beyond l2 the cut front is the bare step
+        q = np.exp(-lam * r)
+        q /= 1 + q
+        q1 = q * (1 - q)
+        gap = sg * q
+        v0 = gap + k * pos
+        v1 = (lam * k) * q1 * live
+        v2 = (lam * lam) * sg * q1 * (1 - 2 * q)
+        mid = np.flatnonzero(live & (r > prof.l1))
+        if mid.size:
+            w = prof.l2 - prof.l1
+            f0, f1, f2 = v0.reshape(-1), v1.reshape(-1), v2.reshape(-1)  # views
+            S, S1, S2 = _smoothstep((prof.l2 - r.reshape(-1)[mid]) / w)
+            dchi, d2chi = -np.sign(x.reshape(-1)[mid]) * S1 / w, S2 / w**2
+            g, d1 = gap.reshape(-1)[mid], f1[mid]
+            f0[mid] = f0[mid] + (S - 1) * g
+            f1[mid] = dchi * g + S * d1
+            f2[mid] = d2chi * g + 2 * dchi * d1 + S * f2[mid]
+        return v0, v1, v2
+
+    def _cumulative(self, F, twice=None):
+        """``int_0^s F`` (unit period, along axis 0) of periodic columns by one real FFT pair.
+
+        With ``twice`` (column indices), also ``int_0^s int_0^s' F`` of those columns,
+        appended. Same result as ``Fourier.cumulative`` (applied twice).
+        """
+        M = F.shape[0]
+        s = self.grid.s[:, None]
+        Fh = np.fft.rfft(F, axis=0)
+        mean = Fh[0].real / M
+        inv = self._inv_ik
+        Ph = Fh * inv
+        if twice is not None:
+            Ph = np.concatenate([Ph, Ph[:, twice] * inv], axis=1)
+        P = np.fft.irfft(Ph, n=M, axis=0)
+        n = F.shape[1]
+        out = P[:, :n] - P[0, :n] + mean * s
+        if twice is None:
+            return out
+        P1, Q, mt = P[:, twice], P[:, n:], mean[twice]
+        return out, Q - Q[0] - P1[0] * s + 0.5 * mt * s**2
+
     def _fields(self, p, cutoff=None, L=None):
         """Everything on the quadrature grid (``sigma = L s``) from one evaluation of the fronts."""
         L = self.length if L is None else float(L)
@@ -301,26 +425,35 @@ class FrontODE:
         prof = SpliceProfile(self.front, p, L, cut)
         grid = self.grid
         s = L * grid.s
-        y = prof.local(s)
-        m = prof.a.size
-        v0, v1, v2 = prof.cut_front(np.concatenate([y + prof.a, y - prof.a], axis=1))
-        psi, d1, d2 = (np.sum(v[:, :m] - v[:, m:], axis=1) for v in (v0, v1, v2))
-        dpsi = np.empty((s.size, 2 * m))
-        dpsi[:, 0::2] = -v1[:, :m]
-        dpsi[:, 1::2] = v1[:, m:]
+        y = s[:, None] - prof.c
+        y -= L * np.floor(y / L + 0.5)  # prof.local(s): wrapped into [-L/2, L/2)
+        M, m = s.size, prof.a.size
+        X = np.empty((M, 2 * m))  # columns up_1, down_1, up_2, ... (the order of p)
+        X[:, 0::2] = y + prof.a
+        X[:, 1::2] = y - prof.a
+        v0, v1, v2 = self._cut_front(prof, X)
+        sgn = np.tile([1.0, -1.0], m)  # psi_N = sum up - sum down
+        psi, d1, d2 = v0 @ sgn, v1 @ sgn, v2 @ sgn
+        dpsi = -sgn * v1
         w = L * grid.weights
+        out = {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "n": np.size(p), "L": L}
+        if self.beta is None:  # fixed length: no d/dL
+            cum = L * self._cumulative(np.column_stack([psi, dpsi]))
+            out["theta"], out["Theta"] = cum[:, 0], cum[:, 1:]
+            return out
         # d/dL at fixed p moves the periodic images: y = (sigma - c) - k L, dy/dL = -k
         # psi_L jumps at the seam sigma = L ~ 0; g = psi_L + (sigma/L) psi' is smooth
-        k = np.rint((s[:, None] - prof.c - y) / L)
+        k = np.repeat(np.rint((s[:, None] - prof.c - y) / L), 2, axis=1) * sgn
         x = s / L
-        g = -np.sum(k * (v1[:, :m] - v1[:, m:]), axis=1) + x * d1
-        dg = -np.sum(k * (v2[:, :m] - v2[:, m:]), axis=1) + d1 / L + x * d2
-        cum = L * grid.cumulative(np.column_stack([psi, dpsi, g]))  # one FFT pair
+        g = -(k * v1).sum(axis=1) + x * d1
+        dg = -(k * v2).sum(axis=1) + d1 / L + x * d2
+        F = np.empty((M, 2 * m + 2))
+        F[:, 0], F[:, 1:-1], F[:, -1] = psi, dpsi, g
+        cum = L * self._cumulative(F)
         theta, Theta = cum[:, 0], cum[:, 1:-1]
         Theta_L = cum[:, -1] - x * psi + theta / L  # int_0^sigma psi_L, pointwise
-        return {"psi": psi, "d1": d1, "d2": d2, "dpsi": dpsi, "w": w, "theta": theta,
-                "Theta": Theta, "n": np.size(p), "L": L, "g": g, "dg": dg,
-                "Theta_L": Theta_L}
+        out.update(theta=theta, Theta=Theta, g=g, dg=dg, Theta_L=Theta_L)
+        return out
 
     def _length_derivatives(self, f):
         """``dE_facet/dL`` and ``dC/dL`` at fixed ``p`` (shape (3,)).
@@ -362,7 +495,53 @@ class FrontODE:
         return self._gradient(self._fields(p, cutoff))
 
     def _correction(self, f):
-        """Newton step ``delta`` and the corrected residual (see :meth:`slow_correction`)."""
+        """Newton step ``delta`` and the corrected residual (see :meth:`slow_correction`).
+
+        ``H = -alpha^2 d^2 + W''(psi_N)`` with the periodic 8th-order central difference
+        ``d^2`` on the quadrature grid: a band matrix (half-bandwidth 8) once the nodes
+        are taken in folded order (:func:`_folded_band`). The bordered system
+        ``[[H, B], [B^T, 0]] (delta, mu) = (-R, 0)``, ``B = [d psi_N / d p, 1]``, is
+        solved by one banded LU of ``H`` and the Schur complement ``B^T H^{-1} B``
+        (size 2N + 1): O(M (2N + 2)) per evaluation instead of the dense ``O(M^3)`` of
+        :meth:`_correction_dense` (the spectral reference; they agree to the difference
+        error, ~1e-7 of the force). ``H delta = -R - B mu`` then gives the corrected
+        residual without applying ``d^2`` again: ``R(psi + delta) = N(delta) - B mu``,
+        ``N(delta) = W'(psi + delta) - W'(psi) - W''(psi) delta``.
+        """
+        psi, W, a2 = f["psi"], self.front.well, self.alpha**2
+        M = psi.size
+        perm, band = self._fd
+        kb = (band.shape[0] - 1) // 3
+        d2W = W.d2W(psi)
+        dW = W.dW(psi)
+        R = -a2 * f["d2"] + dW
+        ab = (-a2 * (M / f["L"]) ** 2) * band  # -alpha^2 d^2, unit-spacing stencil scaled
+        ab[2 * kb] += d2W[perm]
+        nb = f["dpsi"].shape[1] + 1
+        rhs = np.empty((M, 1 + nb), order="F")
+        rhs[:, 0] = -R[perm]
+        rhs[:, 1:-1] = f["dpsi"][perm]
+        rhs[:, -1] = 1.0
+        _, _, X, info = dgbsv(kb, kb, ab, rhs, overwrite_ab=True, overwrite_b=True)
+        if info != 0:  # H singular: the dense reference copes (least squares)
+            return self._correction_dense(f)
+        B = np.column_stack([f["dpsi"][perm], np.ones(M)])
+        S = B.T @ X[:, 1:]
+        try:
+            mu = np.linalg.solve(S, B.T @ X[:, 0])
+        except np.linalg.LinAlgError:
+            mu = np.linalg.lstsq(S, B.T @ X[:, 0], rcond=1e-12)[0]
+        d = X[:, 0] - X[:, 1:] @ mu
+        # B^T delta = 0 holds to the solve's round-off, which the near kernel of H
+        # (the translation modes) amplifies to ~1e-9 relative: project it out exactly
+        d -= B @ np.linalg.solve(B.T @ B, B.T @ d)
+        delta = np.empty(M)
+        delta[perm] = d
+        Rc = (W.dW(psi + delta) - dW - d2W * delta) - f["dpsi"] @ mu[:-1] - mu[-1]
+        return delta, Rc
+
+    def _correction_dense(self, f):
+        """Reference for :meth:`_correction`: spectral ``d^2``, dense bordered solve."""
         psi, W, a2, L = f["psi"], self.front.well, self.alpha**2, f["L"]
         M = psi.size
         k = 2 * np.pi * np.fft.fftfreq(M, d=1.0 / M)  # unit-length wavenumbers
@@ -402,24 +581,28 @@ class FrontODE:
         # d gamma / d p_j = -int_0^sigma n Theta_j. Theta_j = (periodic) + c_j s, so with
         # m = int_0^s n ds' (periodic on a closed curve) and
         # int_0^s s' n ds' = s m - int_0^s m ds', every cumulative integral is of a
-        # periodic function: spectral (Fourier) accuracy, no end corrections.
+        # periodic function: spectral (Fourier) accuracy, no end corrections. One real
+        # FFT pair gives them all.
         theta, Theta, w = f["theta"], f["Theta"], f["w"]
-        L, grid, s = f["L"], self.grid, self.grid.s
-        tau = np.stack([np.cos(theta), np.sin(theta)], axis=1)
-        n = np.stack([tau[:, 1], -tau[:, 0]], axis=1)
-        c = L * f["dpsi"].mean(axis=0)  # Theta_j(L)
-        periodic = Theta - s[:, None] * c
+        L, s = f["L"], self.grid.s
         k = Theta.shape[1]
-        mom = grid.cumulative(np.column_stack([tau, n]))  # (gamma, m) / L
-        gamma, m = L * mom[:, :2], mom[:, 2:]
-        sn = s[:, None] * m - grid.cumulative(m)  # int_0^s s' n ds'
-        cum = grid.cumulative(np.concatenate([n[:, 0:1] * periodic, n[:, 1:2] * periodic],
-                                             axis=1))
-        dgx = -L * (cum[:, :k] + sn[:, 0:1] * c)
-        dgy = -L * (cum[:, k:] + sn[:, 1:2] * c)
-        phi = n[:, 0:1] * dgx + n[:, 1:2] * dgy
-        R = np.column_stack([n[:, 0], n[:, 1], np.sum(gamma * tau, axis=1)])
-        coef = np.linalg.solve(R.T @ (w[:, None] * R), R.T @ (w[:, None] * phi))
+        c = (L / s.size) * f["dpsi"].sum(axis=0)  # Theta_j(L)
+        cs, sn_ = np.cos(theta), np.sin(theta)
+        Y = np.empty((s.size, 4 + 2 * k))
+        Y[:, 0], Y[:, 1], Y[:, 2], Y[:, 3] = cs, sn_, sn_, -cs  # tau, n
+        periodic = Theta - s[:, None] * c
+        np.multiply(sn_[:, None], periodic, out=Y[:, 4:4 + k])
+        np.multiply(-cs[:, None], periodic, out=Y[:, 4 + k:])
+        cum, mm = self._cumulative(Y, twice=[2, 3])  # mm = int_0^s m
+        gx, gy = L * cum[:, 0], L * cum[:, 1]
+        m = cum[:, 2:4]
+        sn = s[:, None] * m - mm  # int_0^s s' n ds'
+        dgx = -L * (cum[:, 4:4 + k] + sn[:, 0:1] * c)
+        dgy = -L * (cum[:, 4 + k:] + sn[:, 1:2] * c)
+        phi = sn_[:, None] * dgx - cs[:, None] * dgy
+        R = np.column_stack([sn_, -cs, gx * cs + gy * sn_])
+        Rw = R.T * w
+        coef = np.linalg.solve(Rw @ R, Rw @ phi)
         return phi - R @ coef
 
     def normal_velocities(self, p, cutoff=None):
@@ -491,8 +674,10 @@ class FrontODE:
             dE = np.append(dE, dEL)
             A = np.column_stack([A, np.append(dCL, 0.0)])
             n += 1
-        K = np.block([[G, A.T], [A, np.zeros((4, 4))]])
-        rhs = np.concatenate([-dE, np.zeros(4)])
+        K = np.zeros((n + 4, n + 4))
+        K[:n, :n], K[:n, n:], K[n:, :n] = G, A.T, A
+        rhs = np.zeros(n + 4)
+        rhs[:n] = -dE
         try:
             sol = np.linalg.solve(K, rhs)
         except np.linalg.LinAlgError:  # degenerate constraints (e.g. a symmetric lens)
@@ -558,7 +743,9 @@ class FrontODE:
             Output times (default: the solver's steps).
         rtol, atol, method
             Passed to :func:`scipy.integrate.solve_ivp` (``atol`` default
-            ``1e-9 * width``).
+            ``1e-9 * width``). With a variable length the implicit methods ("Radau",
+            "BDF", "LSODA") get the Jacobian's length column only (one evaluation; the
+            perimeter mode is the only stiff one).
         max_collisions : int
         close : bool
             Project ``p0`` and the positions after each collision onto ``C = 0``.
@@ -587,7 +774,14 @@ class FrontODE:
             if close:
                 p, hist, _ = close_positions(p, self.front, L, cut)
 
-            def rhs(t, y, cut=cut):
+            last = {}  # the latest evaluation (the implicit methods' Jacobian reuses it)
+            count = [0]
+
+            def rhs(t, y, cut=cut, last=last, count=count):
+                key = y.tobytes()
+                if key in last:
+                    return last[key]
+                count[0] += 1
                 q, Lq = (y[:-1], y[-1]) if var else (y, None)
                 try:
                     v = self._velocity(q, cut, L=Lq)
@@ -595,7 +789,22 @@ class FrontODE:
                     v = None
                 # a wild trial stage (fronts overrun near a collision): NaN makes the
                 # Runge-Kutta error estimate reject the step and shrink it
-                return v if v is not None and np.all(np.isfinite(v)) else np.full(y.size, np.nan)
+                if v is None or not np.all(np.isfinite(v)):
+                    v = np.full(y.size, np.nan)
+                last.clear()
+                last[key] = v
+                return v
+
+            def jac(t, y, cut=cut, rhs=rhs, count=count):
+                # Only the length column: the stiffness of the variable-length flow is the
+                # perimeter mode (eigenvalue ~ -2 pi beta / R), the positions are slow
+                # (|dF/dp| ~ 1/t_c); a difference Jacobian would cost 2N + 1 evaluations.
+                f0 = rhs(t, y)
+                h = 1e-7 * y[-1]
+                count[0] += 1
+                J = np.zeros((y.size, y.size))
+                J[:, -1] = (self._velocity(y[:-1], cut, L=y[-1] + h) - f0) / h
+                return J
 
             def gap_event(t, y, L=L):
                 q, Lq = (y[:-1], y[-1]) if var else (y, L)
@@ -605,9 +814,10 @@ class FrontODE:
             gap_event.direction = -1
             te = None if t_eval is None else t_eval[(t_eval >= t0) & (t_eval <= t_final)]
             y0 = np.append(p, L) if var else p
+            implicit = var and method in ("Radau", "BDF", "LSODA")
             sol = solve_ivp(rhs, (t0, t_final), y0, method=method, t_eval=te, rtol=rtol,
-                            atol=atol, events=gap_event)
-            nfev += sol.nfev
+                            atol=atol, events=gap_event, **({"jac": jac} if implicit else {}))
+            nfev += count[0]
             Y = np.asarray(sol.y, dtype=float).reshape(y0.size, -1).T
             Ls = Y[:, -1] if var else np.full(Y.shape[0], L)
             segments.append(_Segment(np.asarray(sol.t, dtype=float), Y[:, : p.size],
@@ -688,6 +898,7 @@ class FrontODEResult:
         0 reached ``t_final``; 1 stopped after a collision left < 4 fronts; -1 failed.
     message : str
     nfev : int
+        Evaluations of ``F`` (also those for the Jacobian of an implicit method).
     elapsed : float
         Wall time in seconds.
     """

@@ -34,6 +34,9 @@ def test_short_facet_fast_variant():
     assert c.dae.shape[1] == 8 and np.all(np.isfinite(c.dae))
     v = s["variable_length"]
     assert v["collision_rel_diff"] < 0.1 and v["error_at"]["0.5"] < 0.05
+    # the splice manifold's range (every DAE gap >= 2 d_c) is the same data for both
+    assert v["separated_until"] == s["separated_until"] and 0.5 < v["separated_until"] < 1
+    assert v["error_at"]["0.5"] <= v["max_error_separated"] <= v["max_error"]
     assert v["L_change"] < 0  # the collapsing facet shortens the curve, as in the DAE
 
 
