@@ -175,7 +175,9 @@ class CHAScenario:
     at Table T1 (l* = 0.01; the whole curve is ~19 long) but 0.65 at
     l* = 0.1. At l* = 0.03 (N = 1800) and 0.05 (N = 1200), fold lengths 7.2
     and 2.6, rho = 1.3 still keeps the 13 symmetric lobes to t = 0.3 (defect
-    0.005, the grid's). With l* = 0.1 (``--l-star 0.1``; N = 600 suffices) the
+    0.005, the grid's); at l* = 0.2 (N = 300, to t = 2.5, 26-33 s) the lobes
+    turn into thick fingers, 2 / 4 pairs for rho = 1.2 / 1.4 at 0.83 / 0.81 of
+    the optimal separation. With l* = 0.1 (``--l-star 0.1``; N = 600 suffices) the
     runs do what the paper describes: symmetric buckling to t ~ 3e-3, finger pairing
     breaks the symmetry by t ~ 0.01, labyrinths, then parallel fingers
     (stacked layers) that settle by t ~ 0.4. Measured (``qsa reproduce
