@@ -26,7 +26,11 @@ from fractions import Fraction
 import numpy as np
 from numba import njit
 
-__all__ = ["cell_weights", "front_rhs", "band_rows"]
+__all__ = ["cell_weights", "end_weights", "front_rhs", "band_rows"]
+
+#: Reassociation (vectorized reductions) and contraction (FMA); no finite-math or
+#: approximate-function assumptions (the smoothstep relies on exp overflowing to inf).
+_FM = {"reassoc", "contract", "nsz"}
 
 
 def cell_weights(r=8):
@@ -67,29 +71,46 @@ def band_rows(perm, ab):
     return R
 
 
-@njit(cache=True)
-def _cumulative(F, wq, out):
+def end_weights(wq):
+    """The local rule in telescoped form: ``c_k = 1/2 - sum_{l <= k} w_l`` (k = 1..r-1).
+
+    ``int_0^{s_i} f = h (T_i + sum_k c_k [(f_{i+k} - f_{i-k}) - (f_k - f_{-k})])`` with
+    ``T_i`` the trapezoid sum: the same rule as the cell weights ``w`` (an end
+    correction of the trapezoid rule by centred differences), half the work.
+    """
+    return 0.5 - np.cumsum(wq)[:-1]
+
+
+@njit(cache=True, fastmath=_FM, error_model="numpy")
+def _cumulative(F, ck, out):
     """``out[c, i] = int_0^{s_i} F[c]`` (unit period, ``s_i = i/M``) by the local rule."""
     nc, M = F.shape
-    r = wq.size
+    r = ck.size + 1
     pad = np.empty(M + 2 * r)
+    corr = np.empty(M)
     h = 1.0 / M
     for c in range(nc):
-        for i in range(M):
-            pad[r + i] = F[c, i]
-        for i in range(r):
-            pad[i] = F[c, M - r + i]
-            pad[M + r + i] = F[c, i]
+        pad[r:r + M] = F[c]
+        pad[:r] = F[c, M - r:]
+        pad[M + r:] = F[c, :r]
+        corr[:] = 0.0
+        for k in range(1, r):  # shifted views: no negative-index checks, the loop vectorizes
+            w = ck[k - 1]
+            a = pad[r + k:r + k + M]
+            b = pad[r - k:r - k + M]
+            for i in range(M):
+                corr[i] += w * (a[i] - b[i])
+        c0 = corr[0]
         acc = 0.0
+        o = out[c]
+        f0 = pad[r:r + M]
+        f1 = pad[r + 1:r + 1 + M]
         for i in range(M):
-            out[c, i] = acc
-            cell = 0.0
-            for k in range(1, r + 1):
-                cell += wq[k - 1] * (pad[r + i + 1 - k] + pad[r + i + k])
-            acc += h * cell
+            o[i] = h * (acc + (corr[i] - c0))
+            acc += 0.5 * (f0[i] + f1[i])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _gauss_solve(K, b):
     """Solve ``K x = b`` (b of shape (n, m)) by Gaussian elimination with partial pivoting.
 
@@ -130,7 +151,7 @@ def _gauss_solve(K, b):
     return x, True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _band_solve(A, kb, x):
     """Solve the banded system stored by rows (:func:`band_rows`) in place: ``x`` (M, m).
 
@@ -138,7 +159,6 @@ def _band_solve(A, kb, x):
     on an exactly zero pivot.
     """
     M = A.shape[0]
-    m = x.shape[1]
     for j in range(M):
         last = min(j + kb, M - 1)
         ip = j
@@ -150,38 +170,214 @@ def _band_solve(A, kb, x):
                 ip = i
         if big == 0.0:
             return False
-        hi = min(j + 2 * kb, M - 1)
+        span = min(j + 2 * kb, M - 1) - j + 1
         if ip != j:
-            for col in range(j, hi + 1):
-                tj = col - j + kb
-                ti = col - ip + kb
-                A[j, tj], A[ip, ti] = A[ip, ti], A[j, tj]
-            for c in range(m):
-                x[j, c], x[ip, c] = x[ip, c], x[j, c]
+            rj = A[j, kb:kb + span]
+            ri = A[ip, j - ip + kb:j - ip + kb + span]
+            for t in range(span):
+                rj[t], ri[t] = ri[t], rj[t]
+            xj, xi = x[j], x[ip]
+            for c in range(xj.size):
+                xj[c], xi[c] = xi[c], xj[c]
+        rowj = A[j, kb:kb + span]
+        xj = x[j]
+        piv = rowj[0]
+        for i in range(j + 1, last + 1):
+            f = A[i, j - i + kb] / piv
+            if f != 0.0:
+                rowi = A[i, j - i + kb:j - i + kb + span]
+                rowi[0] = 0.0
+                for t in range(1, span):
+                    rowi[t] -= f * rowj[t]
+                xi = x[i]
+                for c in range(xi.size):
+                    xi[c] -= f * xj[c]
+    for j in range(M - 1, -1, -1):
+        xj = x[j]
+        span = min(j + 2 * kb, M - 1) - j + 1
+        rowj = A[j, kb:kb + span]
+        for t in range(1, span):
+            xt = x[j + t]
+            f = rowj[t]
+            for c in range(xj.size):
+                xj[c] -= f * xt[c]
+        piv = rowj[0]
+        for c in range(xj.size):
+            xj[c] = xj[c] / piv
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _band_solve_nopivot(A, kb, x):
+    """:func:`_band_solve` when partial pivoting would keep every pivot in place.
+
+    Same arithmetic as the pivoting solve then (U keeps the half-bandwidth ``kb``, half
+    the work); returns False as soon as a row below would out-pivot the diagonal (the
+    caller then redoes the solve with pivoting). ``x`` (M, m), rows contiguous.
+    """
+    M = A.shape[0]
+    for j in range(M):
+        last = min(j + kb, M - 1)
         piv = A[j, kb]
+        big = abs(piv)
+        for i in range(j + 1, last + 1):
+            if abs(A[i, j - i + kb]) > big:
+                return False
+        if big == 0.0:
+            return False
+        xj = x[j]
+        rowj = A[j, kb:2 * kb + 1]  # columns j ... j + kb
         for i in range(j + 1, last + 1):
             f = A[i, j - i + kb] / piv
             if f != 0.0:
                 A[i, j - i + kb] = 0.0
-                for col in range(j + 1, hi + 1):
-                    A[i, col - i + kb] -= f * A[j, col - j + kb]
-                for c in range(m):
-                    x[i, c] -= f * x[j, c]
+                rowi = A[i, j - i + kb:j - i + 2 * kb + 1]  # columns j ... j + kb
+                for t in range(1, min(kb, M - 1 - j) + 1):
+                    rowi[t] -= f * rowj[t]
+                xi = x[i]
+                for c in range(xi.size):
+                    xi[c] -= f * xj[c]
     for j in range(M - 1, -1, -1):
-        hi = min(j + 2 * kb, M - 1)
-        for c in range(m):
-            v = x[j, c]
-            for col in range(j + 1, hi + 1):
-                v -= A[j, col - j + kb] * x[col, c]
-            x[j, c] = v / A[j, kb]
+        xj = x[j]
+        rowj = A[j, kb:2 * kb + 1]
+        for t in range(1, min(kb, M - 1 - j) + 1):
+            xt = x[j + t]
+            f = rowj[t]
+            for c in range(xj.size):
+                xj[c] -= f * xt[c]
+        piv = A[j, kb]
+        for c in range(xj.size):
+            xj[c] = xj[c] / piv
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_FM, error_model="numpy")
+def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
+    """Overwrite ``Rk`` with the residual of ``psi + delta`` (:meth:`FrontODE._correction`).
+
+    ``H = -alpha^2 d^2 + W''(psi)`` in folded order (band rows :func:`band_rows`), the
+    bordered system by one banded LU and the Schur complement on ``B = [dpsi, 1]``.
+    Returns False on a singular solve.
+    """
+    n, M = dpsi.shape
+    kb = (band.shape[1] - 1) // 3
+    nb = n + 1
+    scale = -a2 * (M / L) ** 2
+    A = np.empty_like(band)
+    Bf = np.empty((M, nb))
+    X = np.empty((M, 1 + nb))
+    for i in range(M):
+        pi = perm[i]
+        for j in range(n):
+            Bf[i, j] = dpsi[j, pi]
+        Bf[i, n] = 1.0
+    for attempt in range(2):
+        for i in range(M):
+            for t in range(band.shape[1]):
+                A[i, t] = scale * band[i, t]
+            x = psi[perm[i]]
+            A[i, kb] += 0.5 * (6.0 * x * x - 6.0 * x * k + k * k)
+            X[i, 0] = -Rk[perm[i]]
+            for j in range(nb):
+                X[i, 1 + j] = Bf[i, j]
+        if attempt == 0:
+            if _band_solve_nopivot(A, kb, X):
+                break
+        elif not _band_solve(A, kb, X):
+            return False
+    XT = np.ascontiguousarray(X.T)
+    BT = np.ascontiguousarray(Bf.T)
+    S = np.empty((nb, nb))
+    Bx = np.empty((nb, 1))
+    BB = np.empty((nb, nb))
+    for a in range(nb):
+        ba = BT[a]
+        v = 0.0
+        for i in range(M):
+            v += ba[i] * XT[0, i]
+        Bx[a, 0] = v
+        for b in range(nb):
+            xb = XT[1 + b]
+            v = 0.0
+            for i in range(M):
+                v += ba[i] * xb[i]
+            S[a, b] = v
+        for b in range(a, nb):
+            bb = BT[b]
+            v = 0.0
+            for i in range(M):
+                v += ba[i] * bb[i]
+            BB[a, b] = v
+            BB[b, a] = v
+    mu, ok2 = _gauss_solve(S, Bx)
+    d = np.empty(M)
+    d[:] = XT[0]
+    for b in range(nb):
+        xb = XT[1 + b]
+        m = mu[b, 0]
+        for i in range(M):
+            d[i] -= m * xb[i]
+    Bd = np.empty((nb, 1))
+    for a in range(nb):
+        ba = BT[a]
+        v = 0.0
+        for i in range(M):
+            v += ba[i] * d[i]
+        Bd[a, 0] = v
+    e, ok3 = _gauss_solve(BB, Bd)
+    for b in range(nb):
+        bb = BT[b]
+        m = e[b, 0]
+        for i in range(M):
+            d[i] -= m * bb[i]
+    for i in range(M):
+        pi = perm[i]
+        v = d[i]
+        # corrected residual R(psi + delta) = N(delta) - B mu
+        x = psi[pi]
+        xd = x + v
+        Nd = 0.5 * xd * (xd - k) * (2.0 * xd - k) - 0.5 * x * (x - k) * (2.0 * x - k) \
+            - 0.5 * (6.0 * x * x - 6.0 * x * k + k * k) * v
+        for a in range(n):
+            Nd -= Bf[i, a] * mu[a, 0]
+        Rk[pi] = Nd - mu[n, 0]
+    return ok2 and ok3
+
+
+@njit(cache=True, error_model="numpy")
+def _ksum(x, wv):
+    """Compensated (Kahan) sum of ``x * wv``."""
+    s = 0.0
+    c = 0.0
+    for i in range(x.size):
+        v = x[i] * wv - c
+        t = s + v
+        c = (t - s) - v
+        s = t
+    return s
+
+
+@njit(cache=True, error_model="numpy")
+def _closure(cs, sn, psi, wv):
+    """``C`` by compensated sums (C is checked against 1e-12; the terms are O(1))."""
+    C = np.empty(3)
+    C[0] = _ksum(cs, wv)
+    C[1] = _ksum(sn, wv)
+    C[2] = _ksum(psi, wv) - 2.0 * np.pi
+    return C
+
+
+@njit(cache=True, fastmath=_FM, error_model="numpy")
 def _fronts(p, L, l1, l2, k, lam, M, variable):
     """Cut logistic fronts on ``sigma_i = L i / M``: ``psi, psi', psi''``, ``d psi/d p_j``,
     ``Theta_j`` (closed form) and, with ``variable``, ``g`` and ``g'`` of the length field.
-    Front-major arrays, shape (2N, M)."""
+    Front-major arrays, shape (2N, M).
+
+    ``e^{-lambda |x|}`` of both fronts of a corner (``x = y +- a``) come from one
+    ``e^{-lambda y} = e^{-lambda sigma} e^{lambda (c + n L)}`` (tabulated ``e^{-lambda
+    sigma}``, one exponential per corner and wrap ``n``): products of exact
+    exponentials, a few ulp.
+    """
     n = p.size
     psi = np.zeros(M)
     d1 = np.zeros(M)
@@ -191,40 +387,62 @@ def _fronts(p, L, l1, l2, k, lam, M, variable):
     g = np.zeros(M)
     dg = np.zeros(M)
     w = l2 - l1
+    hs = L / M
+    invL = 1.0 / L
+    es = np.empty(M)
+    for i in range(M):
+        es[i] = np.exp(-lam * (hs * i))
+    lk = lam * k
+    l2k = lam * lam
     for jc in range(n // 2):
         c = 0.5 * (p[2 * jc] + p[2 * jc + 1])
         a = 0.5 * (p[2 * jc + 1] - p[2 * jc])
-        for side in range(2):
-            j = 2 * jc + side
-            sgn = 1.0 if side == 0 else -1.0
-            u0 = 0.0
-            for i in range(M):
-                s = L * i / M
-                y = s - c
-                nw = np.floor(y / L + 0.5)
-                y -= L * nw
-                x = y + a if side == 0 else y - a
+        ea = np.exp(-lam * a)
+        iea = 1.0 / ea
+        last = np.nan
+        fac = 0.0
+        u0 = np.zeros(2)
+        for i in range(M):
+            y = hs * i - c
+            nw = np.floor(y * invL + 0.5)
+            y -= L * nw
+            if nw != last:
+                fac = np.exp(lam * (c + nw * L))
+                last = nw
+            ey = es[i] * fac  # e^{-lambda y}
+            for side in range(2):
+                j = 2 * jc + side
+                if side == 0:
+                    x = y + a
+                    e = ey * ea
+                    sgn = 1.0
+                else:
+                    x = y - a
+                    e = ey * iea
+                    sgn = -1.0
                 pos = x > 0
                 r = abs(x)
                 if r < l2:
+                    if not pos:
+                        e = 1.0 / e  # e^{-lambda |x|}
                     sg = -k if pos else k
-                    q = np.exp(-lam * r)
-                    q /= 1.0 + q
+                    q = e / (1.0 + e)
                     q1 = q * (1.0 - q)
                     gap = sg * q
                     v0 = gap + (k if pos else 0.0)
-                    v1 = (lam * k) * q1
-                    v2 = (lam * lam) * sg * q1 * (1.0 - 2.0 * q)
+                    v1 = lk * q1
+                    v2 = l2k * sg * q1 * (1.0 - 2.0 * q)
                     if r > l1:
                         t = (l2 - r) / w
                         tu = 1.0 - t
-                        qq = 1.0 / tu - 1.0 / t
-                        S = 1.0 / (1.0 + np.exp(-qq))
-                        dq = 1.0 / (tu * tu) + 1.0 / (t * t)
-                        d2q = 2.0 / (tu * tu * tu) - 2.0 / (t * t * t)
+                        it = 1.0 / t
+                        itu = 1.0 / tu
+                        S = 1.0 / (1.0 + np.exp(it - itu))
+                        dq = itu * itu + it * it
+                        d2q = 2.0 * (itu * itu * itu - it * it * it)
                         aS = S * (1.0 - S)
                         S1 = aS * dq
-                        S2 = aS * (1.0 - 2.0 * S) * dq * dq + aS * d2q
+                        S2 = aS * ((1.0 - 2.0 * S) * dq * dq + d2q)
                         dchi = (-S1 if pos else S1) / w
                         d2chi = S2 / (w * w)
                         v0 = v0 + (S - 1.0) * gap
@@ -240,8 +458,8 @@ def _fronts(p, L, l1, l2, k, lam, M, variable):
                 dpsi[j, i] = -sgn * v1
                 u = v0 + k * nw  # continuous across the wrap
                 if i == 0:
-                    u0 = u
-                Theta[j, i] = -sgn * (u - u0)
+                    u0[side] = u
+                Theta[j, i] = -sgn * (u - u0[side])
                 if variable:
                     # d/dL at fixed p moves the images: dy/dL = -nw
                     g[i] -= nw * sgn * v1
@@ -254,15 +472,17 @@ def _fronts(p, L, l1, l2, k, lam, M, variable):
     return psi, d1, d2, dpsi, Theta, g, dg
 
 
-@njit(cache=True)
-def front_rhs(p, L, l1, l2, k, lam, a2, M, wq, correction, band, perm, variable, beta,
+@njit(cache=True, fastmath=_FM, error_model="numpy")
+def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable, beta,
               L_star):
     """The reduced velocity and its ingredients (see :meth:`FrontODE._velocity`).
 
-    Returns ``sol`` (``p'`` [, ``L'``] and the multipliers), ``ok`` (False: a singular
-    solve, the caller falls back to the numpy path), ``phi`` (2N, M), ``G``, ``dE``
-    (the force, corrected with ``correction``), ``C`` (3,), ``J`` (3, 2N) and ``K``,
-    ``rhs`` (the saddle-point system).
+    Returns ``sol`` (``p'`` [, ``L'``] and the multipliers), ``status`` (0; 1: the
+    saddle-point matrix ``K`` is exactly singular, the caller solves it by least squares;
+    2: the rigid-motion projection is singular, as ``np.linalg.solve`` in the numpy path;
+    3: a solve of the Newton correction is singular, the caller uses the numpy path),
+    ``phi`` (2N, M), ``G``, ``dE`` (the force, corrected with ``correction``), ``C``
+    (3,), ``J`` (3, 2N) and ``K``, ``rhs`` (the saddle-point system).
     """
     n = p.size
     kk = n + 1 if variable else n
@@ -276,7 +496,7 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, wq, correction, band, perm, variable,
     if variable:
         F[1] = g
     cum = np.empty((nf, M))
-    _cumulative(F, wq, cum)
+    _cumulative(F, ck, cum)
     theta = L * cum[0]
     cs = np.cos(theta)
     sn = np.sin(theta)
@@ -294,13 +514,13 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, wq, correction, band, perm, variable,
             F2[2 + j, i] = sn[i] * per
             F2[2 + n + j, i] = -cs[i] * per
     cum2 = np.empty((2 + 2 * n, M))
-    _cumulative(F2, wq, cum2)
+    _cumulative(F2, ck, cum2)
     Fm = np.empty((2, M))  # m = int n = (int sin, -int cos)
     for i in range(M):
         Fm[0, i] = cum2[1, i]
         Fm[1, i] = -cum2[0, i]
     mm = np.empty((2, M))
-    _cumulative(Fm, wq, mm)
+    _cumulative(Fm, ck, mm)
     phi = np.empty((n, M))
     Rr = np.empty((3, M))
     for i in range(M):
@@ -327,24 +547,17 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, wq, correction, band, perm, variable,
             for j in range(n):
                 Rp[a, j] += ra * phi[j, i]
     coef, ok = _gauss_solve(RR, Rp)
+    okc = True
     G = np.zeros((kk, kk))
-    C = np.zeros(3)
-    Cc = np.zeros(3)
+    C = _closure(cs, sn, psi, wv)
     J = np.zeros((3, n))
     for i in range(M):
         for j in range(n):
             phi[j, i] -= coef[0, j] * Rr[0, i] + coef[1, j] * Rr[1, i] + coef[2, j] * Rr[2, i]
-        # compensated sums: C is checked against 1e-12 (closure) and the totals are O(1)
-        for a in range(3):
-            v = (cs[i] if a == 0 else (sn[i] if a == 1 else psi[i])) * wv - Cc[a]
-            t = C[a] + v
-            Cc[a] = (t - C[a]) - v
-            C[a] = t
         for j in range(n):
             J[0, j] -= sn[i] * wv * Theta[j, i]
             J[1, j] += cs[i] * wv * Theta[j, i]
             J[2, j] += wv * dpsi[j, i]
-    C[2] -= 2.0 * np.pi
     for a in range(n):
         for b in range(a, n):
             v = 0.0
@@ -359,63 +572,7 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, wq, correction, band, perm, variable,
         x = psi[i]
         Rk[i] = -a2 * d2[i] + 0.5 * x * (x - k) * (2.0 * x - k)
     if correction:
-        kb = (band.shape[1] - 1) // 3
-        A = np.empty_like(band)
-        scale = -a2 * (M / L) ** 2
-        for i in range(M):
-            for t in range(band.shape[1]):
-                A[i, t] = scale * band[i, t]
-            x = psi[perm[i]]
-            A[i, kb] += 0.5 * (6.0 * x * x - 6.0 * x * k + k * k)
-        nb = n + 1
-        X = np.empty((M, 1 + nb))
-        for i in range(M):
-            X[i, 0] = -Rk[perm[i]]
-            for j in range(n):
-                X[i, 1 + j] = dpsi[j, perm[i]]
-            X[i, nb] = 1.0
-        if not _band_solve(A, kb, X):
-            return np.zeros(kk + 4), False, phi, G, dE, C, J, np.zeros((kk + 4, kk + 4)), \
-                np.zeros(kk + 4)
-        S = np.zeros((nb, nb))
-        Bx = np.zeros((nb, 1))
-        BB = np.zeros((nb, nb))
-        for i in range(M):
-            for a in range(nb):
-                ba = dpsi[a, perm[i]] if a < n else 1.0
-                Bx[a, 0] += ba * X[i, 0]
-                for b in range(nb):
-                    S[a, b] += ba * X[i, 1 + b]
-                    bb = dpsi[b, perm[i]] if b < n else 1.0
-                    BB[a, b] += ba * bb
-        mu, ok2 = _gauss_solve(S, Bx)
-        d = np.empty((M, 1))
-        for i in range(M):
-            v = X[i, 0]
-            for b in range(nb):
-                v -= X[i, 1 + b] * mu[b, 0]
-            d[i, 0] = v
-        Bd = np.zeros((nb, 1))
-        for i in range(M):
-            for a in range(nb):
-                ba = dpsi[a, perm[i]] if a < n else 1.0
-                Bd[a, 0] += ba * d[i, 0]
-        e, ok3 = _gauss_solve(BB, Bd)
-        ok = ok and ok2 and ok3
-        for i in range(M):
-            pi = perm[i]
-            v = d[i, 0]
-            for a in range(n):
-                v -= dpsi[a, pi] * e[a, 0]
-            v -= e[n, 0]
-            # corrected residual R(psi + delta) = N(delta) - B mu
-            x = psi[pi]
-            xd = x + v
-            Nd = 0.5 * xd * (xd - k) * (2.0 * xd - k) - 0.5 * x * (x - k) * (2.0 * x - k) \
-                - 0.5 * (6.0 * x * x - 6.0 * x * k + k * k) * v
-            for a in range(n):
-                Nd -= dpsi[a, pi] * mu[a, 0]
-            Rk[pi] = Nd - mu[n, 0]
+        okc = _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm)
     for i in range(M):
         rw = Rk[i] * wv
         for j in range(n):
@@ -469,4 +626,9 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, wq, correction, band, perm, variable,
     b2 = np.empty((kk + 4, 1))
     b2[:, 0] = rhs
     sol, ok4 = _gauss_solve(K, b2)
-    return sol[:, 0], ok and ok4, phi, G, dE, C, J, K, rhs
+    status = 0 if ok4 else 1
+    if not okc:
+        status = 3
+    if not ok:
+        status = 2
+    return sol[:, 0], status, phi, G, dE, C, J, K, rhs

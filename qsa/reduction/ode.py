@@ -179,6 +179,7 @@ work at ``M ~ 300`` nodes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from operator import itemgetter
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -362,7 +363,7 @@ class FrontODE:
             return None
         perm, band = self._fd
         consts = (float(self.front.kstar), float(self.front.rates[0]), float(self.alpha**2),
-                  int(self.grid.s.size), _kernels.cell_weights(8),
+                  int(self.grid.s.size), _kernels.end_weights(_kernels.cell_weights(8)),
                   _kernels.band_rows(perm, band), np.ascontiguousarray(perm, dtype=np.int64))
         return _kernels.front_rhs, consts
 
@@ -718,11 +719,15 @@ class FrontODE:
         (:meth:`_length_derivatives`).
         """
         if self._kernel is not None:
-            sol, ok = self._run_kernel(p, cutoff, L)[:2]
-            if ok and np.all(np.isfinite(sol)):
+            sol, status, K, rhs = itemgetter(0, 1, 7, 8)(self._run_kernel(p, cutoff, L))
+            if status == 1:  # degenerate constraints: as the numpy path
+                sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
+            if status == 2:  # (a wild trial stage of the integrator)
+                raise np.linalg.LinAlgError("singular rigid-motion projection")
+            if status < 2:
                 n = p.size + (L is not None)
                 return (sol[:n], sol[n:]) if multipliers else sol[:n]
-            # a singular solve: the numpy path's least-squares fallbacks
+            # a singular solve in the Newton correction: the numpy path's fallbacks
         f = self._fields(p, cutoff, L)
         phi = self._normal(f)
         G = phi.T @ (f["w"][:, None] * phi)
