@@ -86,16 +86,20 @@ def end_weights(wq):
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
 def _cumulative(F, ck, out):
-    """``out[c, i] = int_0^{s_i} F[c]`` (unit period, ``s_i = i/M``) by the local rule."""
+    """``out[c, i] = int_0^{s_i} F[c]`` (unit period, ``s_i = i/M``) by the local rule.
+
+    ``out`` first receives the end corrections (loops vectorized over the nodes), then
+    the trapezoid prefix sums are added four columns at a time (independent chains).
+    """
     nc, M = F.shape
     r = ck.size + 1
     pad = np.empty(M + 2 * r)
-    corr = np.empty(M)
     h = 1.0 / M
     for c in range(nc):
         pad[r:r + M] = F[c]
         pad[:r] = F[c, M - r:]
         pad[M + r:] = F[c, :r]
+        corr = out[c]
         corr[:] = 0.0
         for k in range(1, r):  # shifted views: no negative-index checks, the loop vectorizes
             w = ck[k - 1]
@@ -104,13 +108,35 @@ def _cumulative(F, ck, out):
             for i in range(M):
                 corr[i] += w * (a[i] - b[i])
         c0 = corr[0]
-        acc = 0.0
-        o = out[c]
-        f0 = pad[r:r + M]
-        f1 = pad[r + 1:r + 1 + M]
         for i in range(M):
-            o[i] = h * (acc + (corr[i] - c0))
-            acc += 0.5 * (f0[i] + f1[i])
+            corr[i] -= c0
+    for c in range(0, nc, 4):
+        q = min(4, nc - c)
+        a0 = a1 = a2 = a3 = 0.0
+        if q == 4:
+            f0, f1, f2, f3 = F[c], F[c + 1], F[c + 2], F[c + 3]
+            o0, o1, o2, o3 = out[c], out[c + 1], out[c + 2], out[c + 3]
+            for i in range(M - 1):
+                o0[i] = h * (o0[i] + a0)
+                o1[i] = h * (o1[i] + a1)
+                o2[i] = h * (o2[i] + a2)
+                o3[i] = h * (o3[i] + a3)
+                a0 += 0.5 * (f0[i] + f0[i + 1])
+                a1 += 0.5 * (f1[i] + f1[i + 1])
+                a2 += 0.5 * (f2[i] + f2[i + 1])
+                a3 += 0.5 * (f3[i] + f3[i + 1])
+            o0[M - 1] = h * (o0[M - 1] + a0)
+            o1[M - 1] = h * (o1[M - 1] + a1)
+            o2[M - 1] = h * (o2[M - 1] + a2)
+            o3[M - 1] = h * (o3[M - 1] + a3)
+        else:
+            for cc in range(c, c + q):
+                f, o = F[cc], out[cc]
+                acc = 0.0
+                for i in range(M - 1):
+                    o[i] = h * (o[i] + acc)
+                    acc += 0.5 * (f[i] + f[i + 1])
+                o[M - 1] = h * (o[M - 1] + acc)
 
 
 @njit(cache=True, error_model="numpy")
@@ -259,7 +285,8 @@ def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
 
     ``H = -alpha^2 d^2 + W''(psi)`` in folded order (band rows :func:`band_rows`), the
     bordered system by one banded LU and the Schur complement on ``B = [dpsi, 1]``.
-    Returns False on a singular solve.
+    Returns 0; 1 on a singular ``H`` or Schur complement (the numpy path has
+    fallbacks); 2 on a singular ``B^T B`` (the numpy path raises).
     """
     n, M = dpsi.shape
     kb = (band.shape[1] - 1) // 3
@@ -289,7 +316,7 @@ def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
             if _band_solve_nopivot(A, kb, X) <= GROWTH_LIMIT:
                 break
         elif not _band_solve(A, kb, X):
-            return False
+            return 1
     XT = np.ascontiguousarray(X.T)
     BT = np.ascontiguousarray(Bf.T)
     S = np.empty((nb, nb))
@@ -346,7 +373,7 @@ def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
         for a in range(n):
             Nd -= Bf[i, a] * mu[a, 0]
         Rk[pi] = Nd - mu[n, 0]
-    return ok2 and ok3
+    return 0 if ok3 and ok2 else (2 if not ok3 else 1)
 
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
@@ -494,8 +521,9 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable,
 
     Returns ``sol`` (``p'`` [, ``L'``] and the multipliers), ``status`` (0; 1: the
     saddle-point matrix ``K`` is exactly singular, the caller solves it by least squares;
-    2: the rigid-motion projection is singular, as ``np.linalg.solve`` in the numpy path;
-    3: a solve of the Newton correction is singular, the caller uses the numpy path),
+    2: the rigid-motion projection or ``B^T B`` of the Newton correction is singular,
+    ``np.linalg.solve`` raises in the numpy path; 3: another solve of the correction is
+    singular, the caller uses the numpy path and its fallbacks),
     ``phi`` (2N, M), ``G``, ``dE`` (the force, corrected with ``correction``), ``C``
     (3,), ``J`` (3, 2N) and ``K``, ``rhs`` (the saddle-point system).
     """
@@ -562,7 +590,7 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable,
         for j in range(n):
             Rp[a, j] = wv * _dot(Rr[a], phi[j])
     coef, ok = _gauss_solve(RR, Rp)
-    okc = True
+    okc = 0
     G = np.zeros((kk, kk))
     C = _closure(cs, sn, psi, wv)
     J = np.empty((3, n))
@@ -641,8 +669,8 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable,
     b2[:, 0] = rhs
     sol, ok4 = _gauss_solve(K, b2)
     status = 0 if ok4 else 1
-    if not okc:
-        status = 3
+    if okc:
+        status = 3 if okc == 1 else 2
     if not ok:
         status = 2
     return sol[:, 0], status, phi, G, dE, C, J, K, rhs

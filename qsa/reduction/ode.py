@@ -723,7 +723,7 @@ class FrontODE:
             if status == 1:  # degenerate constraints: as the numpy path
                 sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
             if status == 2:  # (a wild trial stage of the integrator)
-                raise np.linalg.LinAlgError("singular rigid-motion projection")
+                raise np.linalg.LinAlgError("Singular matrix")
             if status < 2:
                 n = p.size + (L is not None)
                 return (sol[:n], sol[n:]) if multipliers else sol[:n]
