@@ -26,7 +26,7 @@ from fractions import Fraction
 import numpy as np
 from numba import njit
 
-__all__ = ["cell_weights", "end_weights", "front_rhs", "band_rows"]
+__all__ = ["cell_weights", "end_weights", "front_rhs", "front_velocity", "band_rows"]
 
 #: Reassociation (vectorized reductions) and contraction (FMA); no finite-math or
 #: approximate-function assumptions (the smoothstep relies on exp overflowing to inf).
@@ -226,11 +226,13 @@ def _band_solve(A, kb, x):
 
 
 @njit(cache=True, error_model="numpy")
-def _band_solve_nopivot(A, kb, x):
-    """:func:`_band_solve` without pivoting (``U`` keeps the half-bandwidth ``kb``: half
-    the work). Returns the growth factor ``max |U| / max |A|`` (inf on a zero pivot);
-    the backward error is ``O(growth eps)`` (Wilkinson), so the caller accepts the
-    solution only for a modest growth and otherwise redoes it with pivoting.
+def _band_forward_nopivot(A, kb, x):
+    """Forward elimination of :func:`_band_solve` without pivoting: ``A -> U`` (upper
+    half-bandwidth ``kb``: half the work), ``x -> L^{-1} x``.
+
+    Returns the growth factor ``max |U| / max |A|`` (inf on a zero pivot); the backward
+    error is ``O(growth eps)`` (Wilkinson), so the caller accepts the factorization only
+    for a modest growth and otherwise redoes the solve with pivoting.
     """
     M = A.shape[0]
     amax = 0.0
@@ -257,8 +259,19 @@ def _band_solve_nopivot(A, kb, x):
                 xi = x[i]
                 for c in range(xi.size):
                     xi[c] -= f * xj[c]
-    _back_substitute(A, kb, x, kb)
     return umax / amax
+
+
+@njit(cache=True, error_model="numpy")
+def _back_substitute_1(A, kb, z):
+    """:func:`_back_substitute` of one column ``z`` (M,), ``U`` of half-bandwidth ``kb``."""
+    M = A.shape[0]
+    for j in range(M - 1, -1, -1):
+        span = min(j + kb, M - 1) - j + 1
+        v = z[j]
+        for t in range(1, span):
+            v -= A[j, kb + t] * z[j + t]
+        z[j] = v / A[j, kb]
 
 
 @njit(cache=True, error_model="numpy")
@@ -300,6 +313,19 @@ def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
         for j in range(n):
             Bf[i, j] = dpsi[j, pi]
         Bf[i, n] = 1.0
+    BT = np.ascontiguousarray(Bf.T)
+    BB = np.empty((nb, nb))
+    for a in range(n):
+        for b in range(a, n):
+            BB[a, b] = _dot(dpsi[a], dpsi[b])
+            BB[b, a] = BB[a, b]
+        v = 0.0
+        for i in range(M):
+            v += dpsi[a, i]
+        BB[a, n] = v
+        BB[n, a] = v
+    BB[n, n] = M
+    d = np.empty(M)
     for attempt in range(2):
         for i in range(M):
             for t in range(band.shape[1]):
@@ -312,50 +338,50 @@ def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
         if attempt == 0:
             # H is symmetric and nearly positive definite (its near kernel is the
             # translation modes): elimination without pivoting is stable unless the
-            # entries grow (measured growth 2 ... 120 along the scenarios' paths)
-            if _band_solve_nopivot(A, kb, X) <= GROWTH_LIMIT:
-                break
-        elif not _band_solve(A, kb, X):
+            # entries grow (measured growth 2 ... 120 along the scenarios' paths).
+            # Then H = L D L^T (U = D L^T), so with Y = L^{-1} [-R, B] (the forward
+            # elimination) B^T H^{-1} B = Y_B^T D^{-1} Y_B and B^T H^{-1} (-R) =
+            # Y_B^T D^{-1} Y_R: one back substitution (of Y_R - Y_B mu) instead of nb + 1.
+            if _band_forward_nopivot(A, kb, X) > GROWTH_LIMIT:
+                continue
+            YT = np.ascontiguousarray(X.T)
+            W = np.empty((nb, M))
+            for a in range(nb):
+                for i in range(M):
+                    W[a, i] = YT[1 + a, i] / A[i, kb]
+            S = np.empty((nb, nb))
+            Bx = np.empty((nb, 1))
+            for a in range(nb):
+                Bx[a, 0] = _dot(W[a], YT[0])
+                for b in range(a, nb):
+                    S[a, b] = _dot(W[a], YT[1 + b])
+                    S[b, a] = S[a, b]
+            mu, ok2 = _gauss_solve(S, Bx)
+            d[:] = YT[0]
+            for b in range(nb):
+                m = mu[b, 0]
+                for i in range(M):
+                    d[i] -= m * YT[1 + b, i]
+            _back_substitute_1(A, kb, d)
+            break
+        if not _band_solve(A, kb, X):
             return 1
-    XT = np.ascontiguousarray(X.T)
-    BT = np.ascontiguousarray(Bf.T)
-    S = np.empty((nb, nb))
-    Bx = np.empty((nb, 1))
-    BB = np.empty((nb, nb))
-    for a in range(nb):
-        ba = BT[a]
-        v = 0.0
-        for i in range(M):
-            v += ba[i] * XT[0, i]
-        Bx[a, 0] = v
+        XT = np.ascontiguousarray(X.T)
+        S = np.empty((nb, nb))
+        Bx = np.empty((nb, 1))
+        for a in range(nb):
+            Bx[a, 0] = _dot(BT[a], XT[0])
+            for b in range(nb):
+                S[a, b] = _dot(BT[a], XT[1 + b])
+        mu, ok2 = _gauss_solve(S, Bx)
+        d[:] = XT[0]
         for b in range(nb):
-            xb = XT[1 + b]
-            v = 0.0
+            m = mu[b, 0]
             for i in range(M):
-                v += ba[i] * xb[i]
-            S[a, b] = v
-        for b in range(a, nb):
-            bb = BT[b]
-            v = 0.0
-            for i in range(M):
-                v += ba[i] * bb[i]
-            BB[a, b] = v
-            BB[b, a] = v
-    mu, ok2 = _gauss_solve(S, Bx)
-    d = np.empty(M)
-    d[:] = XT[0]
-    for b in range(nb):
-        xb = XT[1 + b]
-        m = mu[b, 0]
-        for i in range(M):
-            d[i] -= m * xb[i]
+                d[i] -= m * XT[1 + b, i]
     Bd = np.empty((nb, 1))
     for a in range(nb):
-        ba = BT[a]
-        v = 0.0
-        for i in range(M):
-            v += ba[i] * d[i]
-        Bd[a, 0] = v
+        Bd[a, 0] = _dot(BT[a], d)
     e, ok3 = _gauss_solve(BB, Bd)
     for b in range(nb):
         bb = BT[b]
@@ -674,3 +700,12 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable,
     if not ok:
         status = 2
     return sol[:, 0], status, phi, G, dE, C, J, K, rhs
+
+
+@njit(cache=True, error_model="numpy")
+def front_velocity(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable, beta,
+                   L_star):
+    """:func:`front_rhs` returning only ``(sol, status)`` (no boxing of the rest)."""
+    out = front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable, beta,
+                    L_star)
+    return out[0], out[1]

@@ -365,16 +365,18 @@ class FrontODE:
         consts = (float(self.front.kstar), float(self.front.rates[0]), float(self.alpha**2),
                   int(self.grid.s.size), _kernels.end_weights(_kernels.cell_weights(8)),
                   _kernels.band_rows(perm, band), np.ascontiguousarray(perm, dtype=np.int64))
-        return _kernels.front_rhs, consts
+        return _kernels.front_rhs, consts, _kernels.front_velocity
 
     @property
     def backend_used(self):
         """The backend actually evaluating the right-hand side: ``"numpy"`` or ``"numba"``."""
         return "numpy" if self._kernel is None else "numba"
 
-    def _run_kernel(self, p, cutoff=None, L=None, correction=None):
-        """The numba kernel's outputs (see :func:`qsa.reduction._kernels.front_rhs`)."""
-        fn, (k, lam, a2, M, wq, band, perm) = self._kernel
+    def _run_kernel(self, p, cutoff=None, L=None, correction=None, full=True):
+        """The numba kernel's outputs (see :func:`qsa.reduction._kernels.front_rhs`);
+        only ``(sol, status)`` unless ``full``."""
+        fn, (k, lam, a2, M, wq, band, perm), fv = self._kernel
+        fn = fn if full else fv
         Lv = float(self.length if L is None else L)
         p = np.ascontiguousarray(p, dtype=float)
         l1, l2 = cutoff or self.cutoff or default_cutoff(p, Lv)
@@ -719,8 +721,9 @@ class FrontODE:
         (:meth:`_length_derivatives`).
         """
         if self._kernel is not None:
-            sol, status, K, rhs = itemgetter(0, 1, 7, 8)(self._run_kernel(p, cutoff, L))
+            sol, status = self._run_kernel(p, cutoff, L, full=False)
             if status == 1:  # degenerate constraints: as the numpy path
+                K, rhs = itemgetter(7, 8)(self._run_kernel(p, cutoff, L))
                 sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
             if status == 2:  # (a wild trial stage of the integrator)
                 raise np.linalg.LinAlgError("Singular matrix")
