@@ -293,6 +293,27 @@ def _back_substitute(A, kb, x, ku):
 
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
+def _schur(Wl, YT, d, symmetric):
+    """``mu = (Wl Y_B^T)^{-1} Wl Y_R`` and ``d = Y_R - Y_B mu`` (``YT = [Y_R; Y_B^T]``)."""
+    nb, M = Wl.shape
+    S = np.empty((nb, nb))
+    Bx = np.empty((nb, 1))
+    for a in range(nb):
+        Bx[a, 0] = _dot(Wl[a], YT[0])
+        for b in range(a if symmetric else 0, nb):
+            S[a, b] = _dot(Wl[a], YT[1 + b])
+            if symmetric:
+                S[b, a] = S[a, b]
+    mu, ok = _gauss_solve(S, Bx)
+    d[:] = YT[0]
+    for b in range(nb):
+        m = mu[b, 0]
+        for i in range(M):
+            d[i] -= m * YT[1 + b, i]
+    return mu, ok
+
+
+@njit(cache=True, fastmath=_FM, error_model="numpy")
 def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
     """Overwrite ``Rk`` with the residual of ``psi + delta`` (:meth:`FrontODE._correction`).
 
@@ -349,36 +370,12 @@ def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
             for a in range(nb):
                 for i in range(M):
                     W[a, i] = YT[1 + a, i] / A[i, kb]
-            S = np.empty((nb, nb))
-            Bx = np.empty((nb, 1))
-            for a in range(nb):
-                Bx[a, 0] = _dot(W[a], YT[0])
-                for b in range(a, nb):
-                    S[a, b] = _dot(W[a], YT[1 + b])
-                    S[b, a] = S[a, b]
-            mu, ok2 = _gauss_solve(S, Bx)
-            d[:] = YT[0]
-            for b in range(nb):
-                m = mu[b, 0]
-                for i in range(M):
-                    d[i] -= m * YT[1 + b, i]
+            mu, ok2 = _schur(W, YT, d, True)
             _back_substitute_1(A, kb, d)
             break
         if not _band_solve(A, kb, X):
             return 1
-        XT = np.ascontiguousarray(X.T)
-        S = np.empty((nb, nb))
-        Bx = np.empty((nb, 1))
-        for a in range(nb):
-            Bx[a, 0] = _dot(BT[a], XT[0])
-            for b in range(nb):
-                S[a, b] = _dot(BT[a], XT[1 + b])
-        mu, ok2 = _gauss_solve(S, Bx)
-        d[:] = XT[0]
-        for b in range(nb):
-            m = mu[b, 0]
-            for i in range(M):
-                d[i] -= m * XT[1 + b, i]
+        mu, ok2 = _schur(BT, np.ascontiguousarray(X.T), d, False)
     Bd = np.empty((nb, 1))
     for a in range(nb):
         Bd[a, 0] = _dot(BT[a], d)
