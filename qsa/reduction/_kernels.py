@@ -440,7 +440,8 @@ def _fronts(p, L, l1, l2, k, lam, M, variable):
     ``e^{-lambda |x|}`` of both fronts of a corner (``x = y +- a``) come from one
     ``e^{-lambda y} = e^{-lambda sigma} e^{lambda (c + n L)}`` (tabulated ``e^{-lambda
     sigma}``, one exponential per corner and wrap ``n``): products of exact
-    exponentials, a few ulp.
+    exponentials, a few ulp. The logistic part is branch-free (vectorized); the cutoff
+    band ``l1 < |x| < l2`` is gathered first and its exponentials taken in one loop.
     """
     n = p.size
     psi = np.zeros(M)
@@ -458,77 +459,100 @@ def _fronts(p, L, l1, l2, k, lam, M, variable):
         es[i] = np.exp(-lam * (hs * i))
     lk = lam * k
     l2k = lam * lam
+    Y = np.empty(M)
+    NW = np.empty(M)
+    EY = np.empty(M)
+    V0 = np.empty(M)
+    V1 = np.empty(M)
+    V2 = np.empty(M)
+    idx = np.empty(M, dtype=np.int64)
+    IT = np.empty(M)
+    ITU = np.empty(M)
+    ARG = np.empty(M)
     for jc in range(n // 2):
         c = 0.5 * (p[2 * jc] + p[2 * jc + 1])
         a = 0.5 * (p[2 * jc + 1] - p[2 * jc])
         ea = np.exp(-lam * a)
-        iea = 1.0 / ea
         last = np.nan
         fac = 0.0
-        u0 = np.zeros(2)
         for i in range(M):
             y = hs * i - c
             nw = np.floor(y * invL + 0.5)
-            y -= L * nw
+            Y[i] = y - L * nw
+            NW[i] = nw
             if nw != last:
                 fac = np.exp(lam * (c + nw * L))
                 last = nw
-            ey = es[i] * fac  # e^{-lambda y}
-            for side in range(2):
-                j = 2 * jc + side
-                if side == 0:
-                    x = y + a
-                    e = ey * ea
-                    sgn = 1.0
-                else:
-                    x = y - a
-                    e = ey * iea
-                    sgn = -1.0
-                pos = x > 0
+            EY[i] = es[i] * fac
+        for side in range(2):
+            j = 2 * jc + side
+            sa = a if side == 0 else -a
+            eas = ea if side == 0 else 1.0 / ea
+            sgn = 1.0 if side == 0 else -1.0
+            for i in range(M):  # branch-free: vectorized
+                x = Y[i] + sa
                 r = abs(x)
-                if r < l2:
-                    if not pos:
-                        e = 1.0 / e  # e^{-lambda |x|}
-                    sg = -k if pos else k
-                    q = e / (1.0 + e)
-                    q1 = q * (1.0 - q)
-                    gap = sg * q
-                    v0 = gap + (k if pos else 0.0)
-                    v1 = lk * q1
-                    v2 = l2k * sg * q1 * (1.0 - 2.0 * q)
-                    if r > l1:
-                        t = (l2 - r) * iw
-                        tu = 1.0 - t
-                        itt = 1.0 / (t * tu)
-                        it = tu * itt
-                        itu = t * itt
-                        S = 1.0 / (1.0 + np.exp(it - itu))
-                        dq = itu * itu + it * it
-                        d2q = 2.0 * (itu * itu * itu - it * it * it)
-                        aS = S * (1.0 - S)
-                        S1 = aS * dq
-                        S2 = aS * ((1.0 - 2.0 * S) * dq * dq + d2q)
-                        dchi = (-S1 if pos else S1) * iw
-                        d2chi = S2 * iw * iw
-                        v0 = v0 + (S - 1.0) * gap
-                        v2 = d2chi * gap + 2.0 * dchi * v1 + S * v2
-                        v1 = dchi * gap + S * v1
-                else:
-                    v0 = k if pos else 0.0
-                    v1 = 0.0
-                    v2 = 0.0
-                psi[i] += sgn * v0
-                d1[i] += sgn * v1
-                d2[i] += sgn * v2
-                dpsi[j, i] = -sgn * v1
-                u = v0 + k * nw  # continuous across the wrap
-                if i == 0:
-                    u0[side] = u
-                Theta[j, i] = -sgn * (u - u0[side])
-                if variable:
-                    # d/dL at fixed p moves the images: dy/dL = -nw
-                    g[i] -= nw * sgn * v1
-                    dg[i] -= nw * sgn * v2
+                pos = x > 0
+                e = EY[i] * eas
+                e = e if pos else 1.0 / e
+                live = r < l2
+                q = e / (1.0 + e)
+                q1 = q * (1.0 - q)
+                sg = (-k if pos else k) if live else 0.0
+                gap = sg * q
+                V0[i] = gap + (k if pos else 0.0)
+                V1[i] = lk * q1 if live else 0.0
+                V2[i] = l2k * sg * q1 * (1.0 - 2.0 * q)
+            cnt = 0
+            for i in range(M):  # nodes in the cutoff band (branch-free compaction)
+                r = abs(Y[i] + sa)
+                idx[cnt] = i
+                cnt += (r > l1) & (r < l2)
+            for m in range(cnt):  # there chi = S((l2 - r) / w): arguments first
+                i = idx[m]
+                x = Y[i] + sa
+                t = (l2 - abs(x)) * iw
+                tu = 1.0 - t
+                itt = 1.0 / (t * tu)
+                IT[m] = tu * itt
+                ITU[m] = t * itt
+                ARG[m] = IT[m] - ITU[m]
+            for m in range(cnt):  # (the exponentials alone: independent calls)
+                ARG[m] = np.exp(ARG[m])
+            for m in range(cnt):
+                i = idx[m]
+                x = Y[i] + sa
+                pos = x > 0
+                e = EY[i] * eas
+                e = e if pos else 1.0 / e
+                gap = (-k if pos else k) * (e / (1.0 + e))
+                it = IT[m]
+                itu = ITU[m]
+                S = 1.0 / (1.0 + ARG[m])
+                dq = itu * itu + it * it
+                d2q = 2.0 * (itu * itu * itu - it * it * it)
+                aS = S * (1.0 - S)
+                S1 = aS * dq
+                S2 = aS * ((1.0 - 2.0 * S) * dq * dq + d2q)
+                dchi = (-S1 if pos else S1) * iw
+                d2chi = S2 * iw * iw
+                v1 = V1[i]
+                V0[i] = V0[i] + (S - 1.0) * gap
+                V2[i] = d2chi * gap + 2.0 * dchi * v1 + S * V2[i]
+                V1[i] = dchi * gap + S * v1
+            u0 = V0[0] + k * NW[0]
+            dp = dpsi[j]
+            Th = Theta[j]
+            for i in range(M):
+                psi[i] += sgn * V0[i]
+                d1[i] += sgn * V1[i]
+                d2[i] += sgn * V2[i]
+                dp[i] = -sgn * V1[i]
+                Th[i] = -sgn * (V0[i] + k * NW[i] - u0)
+            if variable:
+                for i in range(M):
+                    g[i] -= NW[i] * sgn * V1[i]
+                    dg[i] -= NW[i] * sgn * V2[i]
     if variable:
         for i in range(M):
             x = i / M
