@@ -164,16 +164,48 @@ extrapolated 2.745): variable length 2.7479 (-0.18%; uncorrected 2.7541,
 correction is within the DAE's own discretization uncertainty and gains
 nothing measurable, hence it is an option, off by default.
 
-*Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision;
-DAE at N = 2400: triangle 3.0 s, short facet 1.4 s, BDF2 tol 1e-6). Fixed length
-(RK45, rtol 1e-4, 100-150 evaluations of ~0.5 ms): triangle 0.077 s uncorrected,
-0.101 s with the Newton correction (40x and 30x faster than the DAE at N = 2400),
-short facet 0.058 and 0.080 s (25x, 18x). Variable length (Radau, rtol 1e-4, the
-Jacobian's length column only, 210-300 evaluations): triangle 0.21 and 0.24 s
-(15x, 13x), short facet 0.16 and 0.20 s (9x, 7x). The ODE's evaluation count is
-set by the finite-time approach to the collision (``d' ~ -c exp(-lambda d)``;
-step sizes shrink geometrically), its cost per evaluation by ``O(M N)`` array
-work at ``M ~ 300`` nodes.
+*Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision, best of
+5; DAE: BDF2 tol 1e-6, triangle 1.61 / 2.82 s and short facet 0.80 / 1.35 s at N =
+1200 / 2400). Fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4 with
+the Jacobian's length column only. ``backend="numpy"`` (the reference) spends ~0.5 ms
+per evaluation in numpy call overhead on ``M x 2N ~ 315 x 8`` arrays;
+``backend="numba"`` (:mod:`qsa.reduction._kernels`, the optional ``fast`` extra) fuses
+one evaluation into a compiled kernel of 50 us (100 us with the Newton correction):
+
+    ===========  =================  =======  ======  =====  ==========
+    scenario     correction, L      backend  cpu s   nfev   x DAE 2400
+    ===========  =================  =======  ======  =====  ==========
+    triangle     none, fixed        numpy    0.073   146     39
+    triangle     none, fixed        numba    0.0095  140    296
+    triangle     newton, fixed      numpy    0.101   150     28
+    triangle     newton, fixed      numba    0.0160  150    176
+    triangle     none, variable     numpy    0.197   302     14
+    triangle     none, variable     numba    0.0232  302    122
+    triangle     newton, variable   numpy    0.233   281     12
+    triangle     newton, variable   numba    0.0359  281     78
+    short facet  none, fixed        numpy    0.055    98     25
+    short facet  none, fixed        numba    0.0077   98    174
+    short facet  newton, fixed      numpy    0.076   103     18
+    short facet  newton, fixed      numba    0.0129  103    105
+    short facet  none, variable     numpy    0.153   211      9
+    short facet  none, variable     numba    0.0197  211     69
+    short facet  newton, variable   numpy    0.189   211      7
+    short facet  newton, variable   numba    0.0302  211     45
+    ===========  =================  =======  ======  =====  ==========
+
+(x DAE 1200: divide by ~1.75 for the triangle, ~1.7 for the short facet.) With numba
+the variable-length runs are bounded by Radau's own per-step work (~40% of their
+time). The numba kernel differs from the numpy path only by round-off: ``Theta_j`` in
+closed form (the cut fronts' own integrals), the other cumulative integrals by a
+16th-order local periodic rule (``~1e-10`` of the spectral ones at 3 nodes per width),
+an unpivoted banded ``L D L^T`` for the Newton matrix (growth-factor guarded, pivoted LU
+otherwise); velocities, metric, force and constraints agree to ``< 1e-10`` relative at
+valid splices and the collision times to ``< 2e-7`` relative (``1.4e-7``: the triangle
+without correction, whose step sequence shifts, 140 instead of 146 evaluations; the
+others ``< 3e-10``), far below the model error (0.3-3%). First use compiles the kernel
+(~15 s, cached on disk afterwards: well under a second to load). The ODE's evaluation count is set
+by the finite-time approach to the collision (``d' ~ -c exp(-lambda d)``; step sizes
+shrink geometrically).
 """
 
 from __future__ import annotations
@@ -295,15 +327,16 @@ class FrontODE:
         (:meth:`slow_correction`) instead of the splice's own residual; removes
         most of the rate error of closing pairs (see "Accuracy"). Costs one banded
         solve of size ``M`` (quadrature nodes) per evaluation, ~1.2-1.4x the
-        uncorrected ODE.
+        uncorrected ODE (numpy backend; ~1.7x with numba).
     backend : {"auto", "numpy", "numba"}
         Evaluation of the right-hand side. ``"numpy"``: the reference (spectral
         cumulative integrals). ``"numba"``: one compiled kernel per evaluation
         (:mod:`qsa.reduction._kernels`; needs the optional ``numba``, ``pip install
-        qsa[fast]``, and the quartic well); same results to ~1e-9 relative (closed-form
-        ``Theta_j``, 16th-order local cumulative quadrature), 10-20x cheaper per
-        evaluation (see "Cost"). ``"auto"`` (default): numba when importable and the
-        well is the quartic, else numpy.
+        qsa[fast]``, and the quartic well); same results to round-off (closed-form
+        ``Theta_j``, 16th-order local cumulative quadrature: < 1e-10 relative), 6-10x
+        cheaper per evaluation (see "Cost"). ``"auto"`` (default): numba when
+        importable and the well is the quartic, else numpy. :attr:`backend_used` tells
+        which one runs.
     """
 
     alpha: float
