@@ -42,6 +42,17 @@ def test_numba_backend_without_numba_raises(monkeypatch):
         FrontODE(ALPHA, KSTAR, 3.0, backend="fortran")
 
 
+def test_numba_backend_needs_the_quartic_well(monkeypatch):
+    import importlib
+
+    het_module = importlib.import_module("qsa.equilibria.heteroclinic")
+    pytest.importorskip("numba")
+    monkeypatch.setattr(het_module, "is_quartic", lambda well, kstar: False)
+    assert FrontODE(ALPHA, KSTAR, 3.0).backend_used == "numpy"  # auto: quadrature fronts
+    with pytest.raises(ValueError, match="quartic"):
+        FrontODE(ALPHA, KSTAR, 3.0, backend="numba")
+
+
 def test_numpy_backend_forced_works():
     L, cut, ps = _splices("short-facet", count=1)
     ode = FrontODE(ALPHA, KSTAR, L, backend="numpy")
@@ -115,15 +126,17 @@ def test_cell_weights_order():
     assert errs[0] / errs[1] > 2 ** 7  # 8th order (r = 4)
 
 
-@pytest.mark.parametrize("name,variable", [("short-facet", False), ("short-facet", True),
-                                           ("triangle", False)])
-def test_integrate_same_collision_both_backends(name, variable):
+@pytest.mark.parametrize("name,variable,correction", [
+    ("short-facet", False, None), ("short-facet", True, None),
+    ("short-facet", False, "newton"), ("triangle", False, None)])
+def test_integrate_same_collision_both_backends(name, variable, correction):
     pytest.importorskip("numba")
     L, cut, (p, *_) = _splices(name, count=1)
     opts = {"rtol": 1e-6, "method": "Radau"} if variable else {"rtol": 1e-6}
     times = []
     for backend in ("numpy", "numba"):
-        ode = FrontODE(ALPHA, KSTAR, L, backend=backend, beta=5.0 if variable else None)
+        ode = FrontODE(ALPHA, KSTAR, L, backend=backend, beta=5.0 if variable else None,
+                       correction=correction)
         r = ode.integrate(p, SCENARIOS[name].t_final, max_collisions=0, **opts)
         times.append(r.first_collision.time)
     assert abs(times[1] / times[0] - 1) < 1e-6
