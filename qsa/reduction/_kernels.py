@@ -587,9 +587,14 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable,
         F[1] = g
     cum = np.empty((nf, M))
     _cumulative(F, ck, cum)
-    theta = L * cum[0]
-    cs = np.cos(theta)
-    sn = np.sin(theta)
+    theta = np.empty(M)
+    cs = np.empty(M)
+    sn = np.empty(M)
+    for i in range(M):  # (one loop: sin and cos of the same angle fuse into sincos)
+        th = L * cum[0, i]
+        theta[i] = th
+        cs[i] = np.cos(th)
+        sn[i] = np.sin(th)
     # normal velocities: d gamma/dp_j = -int_0^sigma n Theta_j, Theta_j = periodic - s k_j
     cj = np.empty(n)
     for j in range(n):
