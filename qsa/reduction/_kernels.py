@@ -85,6 +85,25 @@ def end_weights(wq):
 
 
 @njit(cache=True, fastmath=_FM, error_model="numpy")
+def _corrections8(pad, ck, corr):
+    """``corr_i = sum_{k=1}^{7} c_k (f_{i+k} - f_{i-k})`` from the padded column (r = 8)."""
+    r = 8
+    M = corr.size
+    c1, c2, c3, c4, c5, c6, c7 = ck[0], ck[1], ck[2], ck[3], ck[4], ck[5], ck[6]
+    a1, b1 = pad[r + 1:r + 1 + M], pad[r - 1:r - 1 + M]
+    a2, b2 = pad[r + 2:r + 2 + M], pad[r - 2:r - 2 + M]
+    a3, b3 = pad[r + 3:r + 3 + M], pad[r - 3:r - 3 + M]
+    a4, b4 = pad[r + 4:r + 4 + M], pad[r - 4:r - 4 + M]
+    a5, b5 = pad[r + 5:r + 5 + M], pad[r - 5:r - 5 + M]
+    a6, b6 = pad[r + 6:r + 6 + M], pad[r - 6:r - 6 + M]
+    a7, b7 = pad[r + 7:r + 7 + M], pad[r - 7:r - 7 + M]
+    for i in range(M):
+        corr[i] = (c1 * (a1[i] - b1[i]) + c2 * (a2[i] - b2[i]) + c3 * (a3[i] - b3[i])
+                   + c4 * (a4[i] - b4[i]) + c5 * (a5[i] - b5[i]) + c6 * (a6[i] - b6[i])
+                   + c7 * (a7[i] - b7[i]))
+
+
+@njit(cache=True, fastmath=_FM, error_model="numpy")
 def _cumulative(F, ck, out):
     """``out[c, i] = int_0^{s_i} F[c]`` (unit period, ``s_i = i/M``) by the local rule.
 
@@ -100,13 +119,16 @@ def _cumulative(F, ck, out):
         pad[:r] = F[c, M - r:]
         pad[M + r:] = F[c, :r]
         corr = out[c]
-        corr[:] = 0.0
-        for k in range(1, r):  # shifted views: no negative-index checks, the loop vectorizes
-            w = ck[k - 1]
-            a = pad[r + k:r + k + M]
-            b = pad[r - k:r - k + M]
-            for i in range(M):
-                corr[i] += w * (a[i] - b[i])
+        if r == 8:  # the default rule: one fused pass
+            _corrections8(pad, ck, corr)
+        else:
+            corr[:] = 0.0
+            for k in range(1, r):  # shifted views: no negative-index checks, vectorized
+                w = ck[k - 1]
+                a = pad[r + k:r + k + M]
+                b = pad[r - k:r - k + M]
+                for i in range(M):
+                    corr[i] += w * (a[i] - b[i])
         c0 = corr[0]
         for i in range(M):
             corr[i] -= c0
