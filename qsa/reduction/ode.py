@@ -165,32 +165,32 @@ correction is within the DAE's own discretization uncertainty and gains
 nothing measurable, hence it is an option, off by default.
 
 *Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision, best of
-5; DAE: BDF2 tol 1e-6, triangle 1.61 / 2.82 s and short facet 0.80 / 1.35 s at N =
+5; DAE: BDF2 tol 1e-6, triangle 1.60 / 2.76 s and short facet 0.78 / 1.38 s at N =
 1200 / 2400). Fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4 with
 the Jacobian's length column only. ``backend="numpy"`` (the reference) spends ~0.5 ms
 per evaluation in numpy call overhead on ``M x 2N ~ 315 x 8`` arrays;
 ``backend="numba"`` (:mod:`qsa.reduction._kernels`, the optional ``fast`` extra) fuses
-one evaluation into a compiled kernel of 50 us (100 us with the Newton correction):
+one evaluation into a compiled kernel of ~45 us (~95 us with the Newton correction):
 
     ===========  =================  =======  ======  =====  ==========
     scenario     correction, L      backend  cpu s   nfev   x DAE 2400
     ===========  =================  =======  ======  =====  ==========
-    triangle     none, fixed        numpy    0.073   146     39
-    triangle     none, fixed        numba    0.0095  140    296
-    triangle     newton, fixed      numpy    0.101   150     28
-    triangle     newton, fixed      numba    0.0160  150    176
-    triangle     none, variable     numpy    0.197   302     14
-    triangle     none, variable     numba    0.0232  302    122
-    triangle     newton, variable   numpy    0.233   281     12
-    triangle     newton, variable   numba    0.0359  281     78
+    triangle     none, fixed        numpy    0.074   146     37
+    triangle     none, fixed        numba    0.0088  140    315
+    triangle     newton, fixed      numpy    0.101   150     27
+    triangle     newton, fixed      numba    0.0163  150    170
+    triangle     none, variable     numpy    0.206   302     13
+    triangle     none, variable     numba    0.0224  302    124
+    triangle     newton, variable   numpy    0.234   281     12
+    triangle     newton, variable   numba    0.0348  281     79
     short facet  none, fixed        numpy    0.055    98     25
-    short facet  none, fixed        numba    0.0077   98    174
+    short facet  none, fixed        numba    0.0072   98    191
     short facet  newton, fixed      numpy    0.076   103     18
-    short facet  newton, fixed      numba    0.0129  103    105
-    short facet  none, variable     numpy    0.153   211      9
-    short facet  none, variable     numba    0.0197  211     69
+    short facet  newton, fixed      numba    0.0123  103    112
+    short facet  none, variable     numpy    0.150   211      9
+    short facet  none, variable     numba    0.0176  211     79
     short facet  newton, variable   numpy    0.189   211      7
-    short facet  newton, variable   numba    0.0302  211     45
+    short facet  newton, variable   numba    0.0293  211     47
     ===========  =================  =======  ======  =====  ==========
 
 (x DAE 1200: divide by ~1.75 for the triangle, ~1.7 for the short facet.) With numba
