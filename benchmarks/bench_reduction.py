@@ -5,8 +5,11 @@ stopped at the first pair annihilation; run through
 :func:`qsa.reduction.compare.compare_fronts`) at each resolution N, and the four
 reductions (force correction none / newton, fixed length / variable length with
 beta = 5) stopped at their first collision, with the settings of ``compare_fronts``
-(fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4). Prints CPU
-seconds (``time.process_time``, best of a few ODE runs, robust on a shared machine),
+(fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4), each with both
+right-hand-side backends (``numpy``, the reference, and the compiled ``numba`` kernel
+when numba is installed: ``pip install qsa[fast]``). Prints CPU seconds
+(``time.process_time``, best of 5 ODE runs after a warm-up run that also compiles or
+loads the numba kernel, robust on a shared machine),
 DAE steps / ODE right-hand-side evaluations (with those of the Jacobian), the
 speedup against the DAE at each N and the collision times. The DAE collision time
 converges like N^-2 (second-order differences), so the DAE needs N ~ 2400 to be within
@@ -29,13 +32,23 @@ from qsa.reduction.ode import FrontODE
 VARIANTS = [(None, False), ("newton", False), (None, True), ("newton", True)]
 
 
-def ode_cpu(scenario, correction=None, variable=False, repeat=3):
+def backends():
+    """The available right-hand-side backends."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return ["numpy"]
+    return ["numpy", "numba"]
+
+
+def ode_cpu(scenario, correction=None, variable=False, backend="numpy", repeat=5):
     """Best-of-``repeat`` CPU time of the ODE alone (to its first collision), nfev, ``t_c``."""
     eq = scenario_splice(scenario)
     p = np.array(eq.params["positions"])
     ode = FrontODE(0.1, 5.0, eq.params["L"], correction=correction,
-                   beta=5.0 if variable else None)
+                   beta=5.0 if variable else None, backend=backend)
     opts = {"rtol": 1e-4, "method": "Radau"} if variable else {"rtol": 1e-4}
+    ode.integrate(p, SCENARIOS[scenario].t_final, max_collisions=0, **opts)  # warm-up
     best = np.inf
     for _ in range(repeat):
         t0 = time.process_time()
@@ -57,13 +70,15 @@ def main(Ns):
                   f"{s['collision_dae']:9.5f}")
         head = "".join(f" {'x DAE ' + str(N):>11s}" for N in Ns)
         diff = "".join(f" {'%/' + str(N):>7s}" for N in Ns)
-        print(f"  {'reduction':22s} {'cpu s':>7s} {'nfev':>5s}{head} {'t_c':>9s}{diff}")
+        print(f"  {'reduction':22s} {'backend':>7s} {'cpu s':>7s} {'nfev':>5s}{head} "
+              f"{'t_c':>10s}{diff}")
         for correction, variable in VARIANTS:
-            cpu, nfev, tc = ode_cpu(name, correction, variable)
-            label = f"{correction or 'none'}, {'variable' if variable else 'fixed'} L"
-            sp = "".join(f" {dae[N][0] / cpu:11.0f}" for N in Ns)
-            rel = "".join(f" {100 * (tc / dae[N][1] - 1):+7.2f}" for N in Ns)
-            print(f"  {label:22s} {cpu:7.3f} {nfev:5d}{sp} {tc:9.5f}{rel}")
+            for backend in backends():
+                cpu, nfev, tc = ode_cpu(name, correction, variable, backend)
+                label = f"{correction or 'none'}, {'variable' if variable else 'fixed'} L"
+                sp = "".join(f" {dae[N][0] / cpu:11.0f}" for N in Ns)
+                rel = "".join(f" {100 * (tc / dae[N][1] - 1):+7.2f}" for N in Ns)
+                print(f"  {label:22s} {backend:>7s} {cpu:7.4f} {nfev:5d}{sp} {tc:10.7f}{rel}")
 
 
 if __name__ == "__main__":

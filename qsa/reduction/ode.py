@@ -164,21 +164,54 @@ extrapolated 2.745): variable length 2.7479 (-0.18%; uncorrected 2.7541,
 correction is within the DAE's own discretization uncertainty and gains
 nothing measurable, hence it is an option, off by default.
 
-*Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision;
-DAE at N = 2400: triangle 3.0 s, short facet 1.4 s, BDF2 tol 1e-6). Fixed length
-(RK45, rtol 1e-4, 100-150 evaluations of ~0.5 ms): triangle 0.077 s uncorrected,
-0.101 s with the Newton correction (40x and 30x faster than the DAE at N = 2400),
-short facet 0.058 and 0.080 s (25x, 18x). Variable length (Radau, rtol 1e-4, the
-Jacobian's length column only, 210-300 evaluations): triangle 0.21 and 0.24 s
-(15x, 13x), short facet 0.16 and 0.20 s (9x, 7x). The ODE's evaluation count is
-set by the finite-time approach to the collision (``d' ~ -c exp(-lambda d)``;
-step sizes shrink geometrically), its cost per evaluation by ``O(M N)`` array
-work at ``M ~ 300`` nodes.
+*Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision, best of
+5; DAE: BDF2 tol 1e-6, triangle 1.60 / 2.76 s and short facet 0.78 / 1.38 s at N =
+1200 / 2400). Fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4 with
+the Jacobian's length column only. ``backend="numpy"`` (the reference) spends ~0.5 ms
+per evaluation in numpy call overhead on ``M x 2N ~ 315 x 8`` arrays;
+``backend="numba"`` (:mod:`qsa.reduction._kernels`, the optional ``fast`` extra) fuses
+one evaluation into a compiled kernel of ~45 us (~95 us with the Newton correction):
+
+    ===========  =================  =======  ======  =====  ==========
+    scenario     correction, L      backend  cpu s   nfev   x DAE 2400
+    ===========  =================  =======  ======  =====  ==========
+    triangle     none, fixed        numpy    0.074   146     37
+    triangle     none, fixed        numba    0.0088  140    315
+    triangle     newton, fixed      numpy    0.101   150     27
+    triangle     newton, fixed      numba    0.0163  150    170
+    triangle     none, variable     numpy    0.206   302     13
+    triangle     none, variable     numba    0.0224  302    124
+    triangle     newton, variable   numpy    0.234   281     12
+    triangle     newton, variable   numba    0.0348  281     79
+    short facet  none, fixed        numpy    0.055    98     25
+    short facet  none, fixed        numba    0.0072   98    191
+    short facet  newton, fixed      numpy    0.076   103     18
+    short facet  newton, fixed      numba    0.0123  103    112
+    short facet  none, variable     numpy    0.150   211      9
+    short facet  none, variable     numba    0.0176  211     79
+    short facet  newton, variable   numpy    0.189   211      7
+    short facet  newton, variable   numba    0.0293  211     47
+    ===========  =================  =======  ======  =====  ==========
+
+(x DAE 1200: divide by ~1.75 for the triangle, ~1.7 for the short facet.) With numba
+the variable-length runs are bounded by Radau's own per-step work (~40% of their
+time). The numba kernel differs from the numpy path only by round-off: ``Theta_j`` in
+closed form (the cut fronts' own integrals), the other cumulative integrals by a
+16th-order local periodic rule (``~1e-10`` of the spectral ones at 3 nodes per width),
+an unpivoted banded ``L D L^T`` for the Newton matrix (growth-factor guarded, pivoted LU
+otherwise); velocities, metric, force and constraints agree to ``< 1e-10`` relative at
+valid splices and the collision times to ``< 2e-7`` relative (``1.4e-7``: the triangle
+without correction, whose step sequence shifts, 140 instead of 146 evaluations; the
+others ``< 3e-10``), far below the model error (0.3-3%). First use compiles the kernel
+(~15 s, cached on disk afterwards: well under a second to load). The ODE's evaluation count is set
+by the finite-time approach to the collision (``d' ~ -c exp(-lambda d)``; step sizes
+shrink geometrically).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from operator import itemgetter
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -294,7 +327,16 @@ class FrontODE:
         (:meth:`slow_correction`) instead of the splice's own residual; removes
         most of the rate error of closing pairs (see "Accuracy"). Costs one banded
         solve of size ``M`` (quadrature nodes) per evaluation, ~1.2-1.4x the
-        uncorrected ODE.
+        uncorrected ODE (numpy backend; ~1.7x with numba).
+    backend : {"auto", "numpy", "numba"}
+        Evaluation of the right-hand side. ``"numpy"``: the reference (spectral
+        cumulative integrals). ``"numba"``: one compiled kernel per evaluation
+        (:mod:`qsa.reduction._kernels`; needs the optional ``numba``, ``pip install
+        qsa[fast]``, and the quartic well); same results to round-off (closed-form
+        ``Theta_j``, 16th-order local cumulative quadrature: < 1e-10 relative), 6-10x
+        cheaper per evaluation (see "Cost"). ``"auto"`` (default): numba when
+        importable and the well is the quartic, else numpy. :attr:`backend_used` tells
+        which one runs.
     """
 
     alpha: float
@@ -306,10 +348,12 @@ class FrontODE:
     beta: float = None
     L_star: float = None
     correction: str = None
+    backend: str = "auto"
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)
     _fd: tuple = field(init=False, repr=False, compare=False)
     _inv_ik: np.ndarray = field(init=False, repr=False, compare=False)
+    _kernel: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         for name in ("alpha", "kstar", "length", "points_per_width"):
@@ -331,6 +375,48 @@ class FrontODE:
             object.__setattr__(self, "L_star", float(self.length))
         if self.correction not in (None, "newton"):
             raise ValueError(f"correction must be None or 'newton', got {self.correction!r}")
+        object.__setattr__(self, "_kernel", self._resolve_backend())
+
+    def _resolve_backend(self):
+        """``None`` (numpy) or ``(front_rhs, constants)`` of the numba kernel."""
+        if self.backend not in ("auto", "numpy", "numba"):
+            raise ValueError(f"backend must be 'auto', 'numpy' or 'numba', got {self.backend!r}")
+        if self.backend == "numpy":
+            return None
+        try:
+            from qsa.reduction import _kernels
+        except ImportError as exc:
+            if self.backend == "numba":
+                raise ValueError("backend='numba' needs numba (pip install numba, or the "
+                                 "'fast' extra: pip install qsa[fast])") from exc
+            return None
+        if not self.front.closed_form:
+            if self.backend == "numba":
+                raise ValueError("backend='numba' supports the quartic well only")
+            return None
+        perm, band = self._fd
+        consts = (float(self.front.kstar), float(self.front.rates[0]), float(self.alpha**2),
+                  int(self.grid.s.size), _kernels.end_weights(_kernels.cell_weights(8)),
+                  _kernels.band_rows(perm, band), np.ascontiguousarray(perm, dtype=np.int64))
+        return _kernels.front_rhs, consts, _kernels.front_velocity
+
+    @property
+    def backend_used(self):
+        """The backend actually evaluating the right-hand side: ``"numpy"`` or ``"numba"``."""
+        return "numpy" if self._kernel is None else "numba"
+
+    def _run_kernel(self, p, cutoff=None, L=None, correction=None, full=True):
+        """The numba kernel's outputs (see :func:`qsa.reduction._kernels.front_rhs`);
+        only ``(sol, status)`` unless ``full``."""
+        fn, (k, lam, a2, M, wq, band, perm), fv = self._kernel
+        fn = fn if full else fv
+        Lv = float(self.length if L is None else L)
+        p = np.ascontiguousarray(p, dtype=float)
+        l1, l2 = cutoff or self.cutoff or default_cutoff(p, Lv)
+        corr = self.correction == "newton" if correction is None else bool(correction)
+        beta = 0.0 if self.beta is None else float(self.beta)
+        return fn(p, Lv, float(l1), float(l2), k, lam, a2, M, wq, corr, band, perm,
+                  L is not None, beta, float(self.L_star))
 
     # ------------------------------------------------------------ geometry
     @property
@@ -492,6 +578,8 @@ class FrontODE:
 
     def gradient(self, p, cutoff=None):
         """``dE/dp_j = int R_kappa d psi_N/d p_j dsigma``, shape (2N,)."""
+        if self._kernel is not None:
+            return self._run_kernel(p, cutoff, correction=False)[4]
         return self._gradient(self._fields(p, cutoff))
 
     def _correction(self, f):
@@ -610,11 +698,16 @@ class FrontODE:
 
         Also returns the quadrature weights ``dsigma`` (shape (M,)).
         """
+        if self._kernel is not None:
+            phi = self._run_kernel(p, cutoff, correction=False)[2]
+            return phi.T.copy(), self.length * self.grid.weights
         f = self._fields(p, cutoff)
         return self._normal(f), f["w"]
 
     def metric(self, p, cutoff=None):
         """The pulled-back metric ``G_ij = int phi_i^perp phi_j^perp dsigma``, (2N, 2N)."""
+        if self._kernel is not None:
+            return self._run_kernel(p, cutoff, correction=False)[3]
         phi, w = self.normal_velocities(p, cutoff)
         return phi.T @ (w[:, None] * phi)
 
@@ -626,6 +719,9 @@ class FrontODE:
 
     def constraints(self, p, cutoff=None):
         """``C(p)`` (shape (3,), as :func:`qsa.equilibria.splice_closure`) and ``dC/dp`` (3, 2N)."""
+        if self._kernel is not None:
+            out = self._run_kernel(p, cutoff, correction=False)
+            return out[5], out[6]
         return self._constraints(self._fields(p, cutoff))
 
     def velocity(self, p, cutoff=None, multipliers=False):
@@ -657,6 +753,17 @@ class FrontODE:
         ``dC/dL`` at fixed ``p`` come from the images' tails
         (:meth:`_length_derivatives`).
         """
+        if self._kernel is not None:
+            sol, status = self._run_kernel(p, cutoff, L, full=False)
+            if status == 1:  # degenerate constraints: as the numpy path
+                K, rhs = itemgetter(7, 8)(self._run_kernel(p, cutoff, L))
+                sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
+            if status == 2:  # (a wild trial stage of the integrator)
+                raise np.linalg.LinAlgError("Singular matrix")
+            if status < 2:
+                n = p.size + (L is not None)
+                return (sol[:n], sol[n:]) if multipliers else sol[:n]
+            # a singular solve in the Newton correction: the numpy path's fallbacks
         f = self._fields(p, cutoff, L)
         phi = self._normal(f)
         G = phi.T @ (f["w"][:, None] * phi)
@@ -771,7 +878,9 @@ class FrontODE:
         status, message = 0, "reached t_final"
         while True:
             cut = self.cutoff or default_cutoff(p, L)
-            if close:
+            if close and not (self._kernel is not None and np.linalg.norm(
+                    self._run_kernel(p, cut, L if var else None, False)[5]) <= 1e-12):
+                # (the kernel's C on the ODE grid spares closing an already closed p0)
                 p, hist, _ = close_positions(p, self.front, L, cut)
 
             last = {}  # the latest evaluation (the implicit methods' Jacobian reuses it)
