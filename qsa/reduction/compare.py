@@ -173,6 +173,8 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
     alive = np.all(np.isfinite(tracks.positions), axis=1)
 
     ode = FrontODE(alpha, kstar, L, correction=correction)
+    # warm-up: loads (or compiles) the numba kernels outside the timing
+    ode.integrate(p0, 1e-6 * t_final, rtol=rtol, max_collisions=0)
     start = time.process_time()
     sol = ode.integrate(p0, t_final, rtol=rtol, max_collisions=0)
     time_ode = time.process_time() - start
@@ -242,6 +244,7 @@ def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_m
     ``wide`` marks the DAE snapshots at which every gap is at least ``2 d_c``.
     """
     ode = FrontODE(alpha, kstar, L, beta=beta, correction=correction)
+    ode.integrate(p0, 1e-6 * t_final, rtol=rtol, method="Radau", max_collisions=0)  # warm-up
     start = time.process_time()
     sol = ode.integrate(p0, t_final, rtol=rtol, method="Radau", max_collisions=0)
     cpu = time.process_time() - start
