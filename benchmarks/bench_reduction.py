@@ -5,7 +5,7 @@ stopped at the first pair annihilation; run through
 :func:`qsa.reduction.compare.compare_fronts`) at each resolution N, and the four
 reductions (force correction none / newton, fixed length / variable length with
 beta = 5) stopped at their first collision, with the settings of ``compare_fronts``
-(fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4), each with both
+(rtol 1e-4, ``method="auto"``: RK45, or Radau for a stiff perimeter mode), each with both
 right-hand-side backends (``numpy``, the reference, and the compiled ``numba`` kernel
 when numba is installed: ``pip install qsa[fast]``). Prints CPU seconds
 (``time.process_time``, best of 5 ODE runs after a warm-up run that also compiles or
@@ -47,7 +47,7 @@ def ode_cpu(scenario, correction=None, variable=False, backend="numpy", repeat=5
     p = np.array(eq.params["positions"])
     ode = FrontODE(0.1, 5.0, eq.params["L"], correction=correction,
                    beta=5.0 if variable else None, backend=backend)
-    opts = {"rtol": 1e-4, "method": "Radau"} if variable else {"rtol": 1e-4}
+    opts = {"rtol": 1e-4, "method": "auto"}
     ode.integrate(p, SCENARIOS[scenario].t_final, max_collisions=0, **opts)  # warm-up
     best = np.inf
     for _ in range(repeat):

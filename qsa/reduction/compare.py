@@ -144,7 +144,7 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         rescaled by ``t_c^ODE / t_c^DAE``), ``time_dae``, ``time_ode``,
         ``speedup``, ``n_steps_dae``, ``nfev_ode``, ``N``, ``facet_min``, and
         ``variable_length``: the same numbers for the reduction with the length as an
-        unknown (``FrontODE(beta=beta)``, Radau; positions compared as ``p``, which
+        unknown (``FrontODE(beta=beta)``, ``method="auto"``; positions compared as ``p``, which
         differ from the crossings by the neighbours' tails only; also with
         ``max_error_separated`` and ``separated_until``).
     """
@@ -244,13 +244,13 @@ def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_m
     ``wide`` marks the DAE snapshots at which every gap is at least ``2 d_c``.
     """
     ode = FrontODE(alpha, kstar, L, beta=beta, correction=correction)
-    ode.integrate(p0, 1e-6 * t_final, rtol=rtol, method="Radau", max_collisions=0)  # warm-up
+    ode.integrate(p0, 1e-6 * t_final, rtol=rtol, method="auto", max_collisions=0)  # warm-up
     start = time.process_time()
-    sol = ode.integrate(p0, t_final, rtol=rtol, method="Radau", max_collisions=0)
+    sol = ode.integrate(p0, t_final, rtol=rtol, method="auto", max_collisions=0)
     cpu = time.process_time() - start
     tc = sol.first_collision.time if sol.events else np.nan
     m = t <= (tc if np.isfinite(tc) else np.inf)
-    Q = ode.integrate(p0, t_final, t_eval=t[m], rtol=rtol, method="Radau",
+    Q = ode.integrate(p0, t_final, t_eval=t[m], rtol=rtol, method="auto",
                       max_collisions=0).segments[0].p
     P = np.full(dae.shape, np.nan)
     P[: Q.shape[0]] = Q - Q.mean(axis=1, keepdims=True)

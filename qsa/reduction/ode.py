@@ -165,37 +165,39 @@ correction is within the DAE's own discretization uncertainty and gains
 nothing measurable, hence it is an option, off by default.
 
 *Cost* (``benchmarks/bench_reduction.py``, CPU seconds to the first collision, best of
-5; DAE: BDF2 tol 1e-6, triangle 1.60 / 2.76 s and short facet 0.78 / 1.38 s at N =
-1200 / 2400). Fixed length: RK45, rtol 1e-4; variable length: Radau, rtol 1e-4 with
-the Jacobian's length column only. ``backend="numpy"`` (the reference) spends ~0.5 ms
-per evaluation in numpy call overhead on ``M x 2N ~ 315 x 8`` arrays;
-``backend="numba"`` (:mod:`qsa.reduction._kernels`, the optional ``fast`` extra) fuses
-one evaluation into a compiled kernel of ~45 us (~95 us with the Newton correction):
+5; DAE: BDF2 tol 1e-6, triangle 1.56 / 2.75 s and short facet 0.74 / 1.32 s at N =
+1200 / 2400). rtol 1e-4, ``method="auto"``: RK45 at fixed length and for the short
+facet's variable length (its perimeter mode is mild over the interval), Radau with the
+Jacobian's length column only for the triangle's (stiff). ``backend="numpy"`` (the
+reference) spends ~0.5 ms per evaluation in numpy call overhead on ``M x 2N ~ 315 x 8``
+arrays; ``backend="numba"`` (:mod:`qsa.reduction._kernels`, the optional ``fast``
+extra) fuses one evaluation into a compiled kernel of ~45 us (~95 us with the Newton
+correction):
 
     ===========  =================  =======  ======  =====  ==========
     scenario     correction, L      backend  cpu s   nfev   x DAE 2400
     ===========  =================  =======  ======  =====  ==========
     triangle     none, fixed        numpy    0.074   146     37
-    triangle     none, fixed        numba    0.0088  140    315
-    triangle     newton, fixed      numpy    0.101   150     27
-    triangle     newton, fixed      numba    0.0163  150    170
-    triangle     none, variable     numpy    0.206   302     13
-    triangle     none, variable     numba    0.0224  302    124
-    triangle     newton, variable   numpy    0.234   281     12
-    triangle     newton, variable   numba    0.0348  281     79
-    short facet  none, fixed        numpy    0.055    98     25
-    short facet  none, fixed        numba    0.0072   98    191
-    short facet  newton, fixed      numpy    0.076   103     18
-    short facet  newton, fixed      numba    0.0123  103    112
-    short facet  none, variable     numpy    0.150   211      9
-    short facet  none, variable     numba    0.0176  211     79
-    short facet  newton, variable   numpy    0.189   211      7
-    short facet  newton, variable   numba    0.0293  211     47
+    triangle     none, fixed        numba    0.0087  140    317
+    triangle     newton, fixed      numpy    0.099   150     28
+    triangle     newton, fixed      numba    0.0153  150    180
+    triangle     none, variable     numpy    0.196   303     14
+    triangle     none, variable     numba    0.0216  303    127
+    triangle     newton, variable   numpy    0.229   282     12
+    triangle     newton, variable   numba    0.0337  282     81
+    short facet  none, fixed        numpy    0.055    98     24
+    short facet  none, fixed        numba    0.0071   98    186
+    short facet  newton, fixed      numpy    0.075   103     18
+    short facet  newton, fixed      numba    0.0125  103    106
+    short facet  none, variable     numpy    0.074   105     18
+    short facet  none, variable     numba    0.0088  123    150
+    short facet  newton, variable   numpy    0.091   104     15
+    short facet  newton, variable   numba    0.0128  104    103
     ===========  =================  =======  ======  =====  ==========
 
-(x DAE 1200: divide by ~1.75 for the triangle, ~1.7 for the short facet.) With numba
-the variable-length runs are bounded by Radau's own per-step work (~40% of their
-time). The numba kernel differs from the numpy path only by round-off: ``Theta_j`` in
+(x DAE 1200: divide by ~1.75 for the triangle, ~1.8 for the short facet.) With numba
+the triangle's variable-length runs are bounded by Radau's own per-step work (~40% of
+their time). The numba kernel differs from the numpy path only by round-off: ``Theta_j`` in
 closed form (the cut fronts' own integrals), the other cumulative integrals by a
 16th-order local periodic rule (``~1e-10`` of the spectral ones at 3 nodes per width),
 an unpivoted banded ``L D L^T`` for the Newton matrix (growth-factor guarded, pivoted LU
@@ -229,6 +231,11 @@ from qsa.equilibria.splice import (
 )
 
 __all__ = ["FrontODE", "FrontODEResult", "collision_distance", "collision_sensitivity"]
+
+
+#: ``method="auto"`` of :meth:`FrontODE.integrate` switches to Radau above this
+#: ``|dL'/dL| * interval`` (RK45's stability limit makes it take ``~|mu| T / 3.3`` steps).
+STIFF_AUTO = 100.0
 
 
 def collision_distance(front):
@@ -837,7 +844,7 @@ class FrontODE:
         return f.positions
 
     # ------------------------------------------------------------ integration
-    def integrate(self, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method="RK45",
+    def integrate(self, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method="auto",
                   max_collisions=10, close=True):
         """Integrate ``p' = F(p)`` from ``p0``, removing colliding pairs.
 
@@ -852,7 +859,12 @@ class FrontODE:
             Passed to :func:`scipy.integrate.solve_ivp` (``atol`` default
             ``1e-9 * width``). With a variable length the implicit methods ("Radau",
             "BDF", "LSODA") get the Jacobian's length column only (one evaluation; the
-            perimeter mode is the only stiff one).
+            perimeter mode is the only stiff one). ``"auto"`` (default): RK45 at fixed
+            length; with a variable length RK45 when the perimeter mode's rate ``mu``
+            (``dL'/dL``, measured at the start of each segment) is mild over the
+            interval, ``|mu| (t_final - t0) <= STIFF_AUTO = 100`` (e.g. the short facet,
+            7.8), Radau otherwise (the triangle, 355): explicit steps would be limited
+            by stability to ``~ 3.3 / |mu|``.
         max_collisions : int
         close : bool
             Project ``p0`` and the positions after each collision onto ``C = 0``.
@@ -923,8 +935,14 @@ class FrontODE:
             gap_event.direction = -1
             te = None if t_eval is None else t_eval[(t_eval >= t0) & (t_eval <= t_final)]
             y0 = np.append(p, L) if var else p
-            implicit = var and method in ("Radau", "BDF", "LSODA")
-            sol = solve_ivp(rhs, (t0, t_final), y0, method=method, t_eval=te, rtol=rtol,
+            meth = method
+            if method == "auto":
+                meth = "RK45"
+                if var:
+                    mu = jac(t0, y0)[-1, -1]
+                    meth = "Radau" if abs(mu) * (t_final - t0) > STIFF_AUTO else "RK45"
+            implicit = var and meth in ("Radau", "BDF", "LSODA")
+            sol = solve_ivp(rhs, (t0, t_final), y0, method=meth, t_eval=te, rtol=rtol,
                             atol=atol, events=gap_event, **({"jac": jac} if implicit else {}))
             nfev += count[0]
             Y = np.asarray(sol.y, dtype=float).reshape(y0.size, -1).T

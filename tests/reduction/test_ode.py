@@ -343,3 +343,23 @@ def test_newton_correction_matches_dae_collision_time():
 def test_bad_correction():
     with pytest.raises(ValueError, match="correction"):
         FrontODE(ALPHA, KSTAR, 2.0, correction="exact")
+
+
+def test_auto_method_picks_radau_only_for_a_stiff_perimeter_mode():
+    """``method="auto"``: RK45 where |dL'/dL| T is mild (short facet), Radau where not (triangle).
+
+    Same choice -> same step sequence -> identical collision times; and the other method
+    would give a different one (the test can tell them apart).
+    """
+    from qsa.reduction.compare import SCENARIOS, scenario_splice
+
+    for name, expected, other in (("short-facet", "RK45", "Radau"), ("triangle", "Radau", "RK45")):
+        eq = scenario_splice(name)
+        p, L = np.array(eq.params["positions"]), eq.params["L"]
+        ode = FrontODE(ALPHA, KSTAR, L, beta=5.0)
+        T = SCENARIOS[name].t_final
+        auto = ode.integrate(p, T, rtol=1e-4, max_collisions=0).first_collision.time
+        same = ode.integrate(p, T, rtol=1e-4, method=expected, max_collisions=0)
+        diff = ode.integrate(p, T, rtol=1e-4, method=other, max_collisions=0)
+        assert auto == same.first_collision.time
+        assert auto != diff.first_collision.time
