@@ -230,21 +230,28 @@ def _band_solve(A, kb, x):
             xj, xi = x[j], x[ip]
             for c in range(xj.size):
                 xj[c], xi[c] = xi[c], xj[c]
-        rowj = A[j, kb:kb + span]
-        xj = x[j]
-        piv = rowj[0]
-        for i in range(j + 1, last + 1):
-            f = A[i, j - i + kb] / piv
-            if f != 0.0:
-                rowi = A[i, j - i + kb:j - i + kb + span]
-                rowi[0] = 0.0
-                for t in range(1, span):
-                    rowi[t] -= f * rowj[t]
-                xi = x[i]
-                for c in range(xi.size):
-                    xi[c] -= f * xj[c]
+        _eliminate_column(A, kb, x, j, last, span)
     _back_substitute(A, kb, x, 2 * kb)
     return True
+
+
+@njit(cache=True, error_model="numpy")
+def _eliminate_column(A, kb, x, j, last, span):
+    """Rows ``j+1 .. last`` minus multiples of row ``j`` (pivot ``A[j, kb]``, ``span``
+    stored entries from the diagonal), and the same on the right-hand sides ``x``."""
+    rowj = A[j, kb:kb + span]
+    xj = x[j]
+    piv = rowj[0]
+    for i in range(j + 1, last + 1):
+        f = A[i, j - i + kb] / piv
+        if f != 0.0:
+            rowi = A[i, j - i + kb:j - i + kb + span]
+            rowi[0] = 0.0
+            for t in range(1, span):
+                rowi[t] -= f * rowj[t]
+            xi = x[i]
+            for c in range(xi.size):
+                xi[c] -= f * xj[c]
 
 
 @njit(cache=True, error_model="numpy")
@@ -270,17 +277,7 @@ def _band_forward_nopivot(A, kb, x):
             return np.inf
         for t in range(span):
             umax = max(umax, abs(rowj[t]))
-        xj = x[j]
-        for i in range(j + 1, j + span):
-            f = A[i, j - i + kb] / piv
-            if f != 0.0:
-                rowi = A[i, j - i + kb:j - i + kb + span]
-                rowi[0] = 0.0
-                for t in range(1, span):
-                    rowi[t] -= f * rowj[t]
-                xi = x[i]
-                for c in range(xi.size):
-                    xi[c] -= f * xj[c]
+        _eliminate_column(A, kb, x, j, j + span - 1, span)
     return umax / amax
 
 
