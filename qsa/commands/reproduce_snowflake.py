@@ -35,6 +35,16 @@ def add_arguments(parser):
                         help="first run N and 2N to time T and report the difference")
 
 
+def _where(sh):
+    """The first crossing's points, e.g. ``13 points, (0.269, 0) ...``."""
+    pts = sh.get("first_crossing_points") or []
+    if not pts:
+        return "?"
+    x, y = pts[0]
+    more = f"{len(pts)} points, " if len(pts) > 1 else ""
+    return f"{more}({x:.3g}, {y:.3g}){' ...' if len(pts) > 1 else ''}"
+
+
 def cha_lines(s):
     sh = s["self_intersection"]
     return [
@@ -46,7 +56,7 @@ def cha_lines(s):
         f"{fmt(s['min_separation_ratio'], '.3f')}; paper: within 10%)",
         f"  self-intersection: {'DETECTED' if sh['detected'] else 'none'}"
         + (f" (t = {sh['first_time']:.4g} .. {sh['last_time']:.4g}, "
-           f"{sh['n_steps_crossing']} steps)" if sh["detected"] else "")
+           f"{sh['n_steps_crossing']} steps; first at {_where(sh)})" if sh["detected"] else "")
         + f"; closest approach {fmt(sh['closest_approach'], '.3g')} at t = "
           f"{fmt(sh['closest_approach_time'], '.3g')}",
         f"  energy {s['energy_initial']:.5g} -> {s['energy_final']:.5g} (max step increase "

@@ -110,6 +110,11 @@ def test_cha_self_intersection_reported_where_and_kept_on_resume(tmp_path):
     assert min(si["first_crossing_arc_gap"]) > 3 * chords(fc_x, fc_y).mean()
     name = out.summary["scenario"]
     assert (tmp_path / f"{name}_crossing.npz").is_file()
+    from qsa.commands.reproduce_snowflake import cha_lines
+
+    text = "\n".join(cha_lines(out.summary))
+    x0, y0 = pts[0]
+    assert "DETECTED" in text and f"first at {len(pts)} points, ({x0:.3g}, {y0:.3g})" in text
     # resuming past the crossing keeps where it happened
     more = run_cha(sc, str(tmp_path), t_final=1.5e-3, resume=True, progress=False)
     assert more.summary["self_intersection"]["first_time"] == si["first_time"]
