@@ -40,6 +40,9 @@ def add_arguments(parser):
                              "Newton step towards the slow manifold (newton; removes most "
                              "of the rate error of a closing facet; ~1.3x the uncorrected "
                              "ODE's CPU time)")
+    parser.add_argument("--dae-check", type=int, metavar="N2", default=None,
+                        help="also run the DAE at N2 nodes (e.g. N/2) and report how far its "
+                             "fronts are from the N run: the reference's own spread")
     parser.add_argument("--eigenvalues", action="store_true",
                         help="also compare the slow eigenvalues of the reduced Jacobian with "
                              "the full linearization (qsa.spectra) at polished regular "
@@ -76,6 +79,12 @@ def _report(s):
                      f"positions {errs}, {100 * v['max_error_separated']:.2f}% while all "
                      f"gaps >= 2 d_c, {100 * v['max_error']:.1f}% up to the first "
                      f"collision; CPU {v['time_ode']:.2f} s ({v['speedup']:.0f}x)")
+    d = s.get("dae_spread")
+    if d:
+        errs = ", ".join(f"{100 * e:.2f}% to {float(f):.2f} t_c" for f, e in d["error_at"].items())
+        lines.append(f"the DAE itself, N={d['N']} vs N={s['N']}: t_c={d['collision']:.6g} "
+                     f"({100 * d['collision_rel_diff']:.2f}%), positions {errs}, "
+                     f"{100 * d['max_error']:.1f}% up to the first collision")
     lines.append(f"CPU time: DAE {s['time_dae']:.2f} s ({s['n_steps_dae']} steps), ODE "
                  f"{s['time_ode']:.3f} s ({s['nfev_ode']} evaluations): "
                  f"{s['speedup']:.0f}x")
@@ -95,7 +104,8 @@ def run(args):
         raise ValueError(f"--N must be at least 50, got {args.N}")
     result = compare_fronts(args.scenario, alpha=args.alpha, kstar=args.kstar, beta=args.beta,
                             N=args.N, t_final=args.t_final, tol=args.tol,
-                            correction=None if args.correction == "none" else args.correction)
+                            correction=None if args.correction == "none" else args.correction,
+                            reference_N=args.dae_check)
     summary = dict(result.summary)
     if args.eigenvalues:
         from qsa.reduction.compare import compare_eigenvalues

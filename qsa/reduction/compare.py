@@ -108,7 +108,7 @@ def _centred(P, L):
 
 def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, t_final=None,
                    tol=1e-6, method="bdf2", rtol=1e-4, fractions=(0.5, 0.9, 0.95, 0.99),
-                   correction=None):
+                   correction=None, reference_N=None):
     """Run the DAE flow and the front ODE from the same splice and compare them.
 
     Parameters
@@ -130,6 +130,12 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         Fractions of the DAE collision time at which the error is reported.
     correction : {None, "newton"}
         Force correction of both reductions (:class:`qsa.reduction.FrontODE`).
+    reference_N : int, optional
+        Also run the DAE at this resolution and report how far its fronts are from
+        the compared DAE run's (``summary["dae_spread"]``: ``error_at``, ``max_error``
+        up to the first collision, ``collision_rel_diff``, in the same units): the
+        reference's own resolution error, the scale against which the reduction's
+        errors near the collision are to be read.
 
     Returns
     -------
@@ -148,29 +154,10 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         differ from the crossings by the neighbours' tails only; also with
         ``max_error_separated`` and ``separated_until``).
     """
-    from qsa import FiniteDifference
-    from qsa.flows import FacetingFlow, solve_flow
-
     sc = SCENARIOS[scenario] if isinstance(scenario, str) else scenario
     t_final = sc.t_final if t_final is None else float(t_final)
-    eq = scenario_splice(sc, alpha, kstar, grid=FiniteDifference(N))
-    p0 = np.array(eq.params["positions"])
-    L = eq.params["L"]
-    n_fronts = p0.size
-    gaps0 = np.diff(np.append(p0, p0[0] + L))
-    facet_min = float(gaps0[1::2].min())
-
-    def stop(t, y, system):
-        return detect_fronts(system.curvature(y), kstar, system.length(y)).n < n_fronts
-
-    x, y = eq.curve.positions()
-    start = time.process_time()
-    res = solve_flow(FacetingFlow(alpha, kstar, beta, L), (x, y), t_final, N=N, tol=tol,
-                     method=method, callback=stop, progress=False)
-    time_dae = time.process_time() - start
-    tracks = track_flow(res, kstar)
-    tc_dae = tracks.first_collision.time if tracks.events else np.nan
-    alive = np.all(np.isfinite(tracks.positions), axis=1)
+    p0, L, facet_min, dae_run = _dae_fronts(sc, alpha, kstar, beta, N, t_final, tol, method)
+    t, dae, tc_dae, res, time_dae = dae_run
 
     ode = FrontODE(alpha, kstar, L, correction=correction)
     # warm-up: loads (or compiles) the numba kernels outside the timing
@@ -181,8 +168,6 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
     tc_ode = sol.first_collision.time if sol.events else np.nan
     seg = sol.segments[0]
 
-    t = res.t[alive]
-    dae = _centred(tracks.positions[alive], L)
     m = t <= (tc_ode if np.isfinite(tc_ode) else np.inf)
     sol_t = ode.integrate(p0, t_final, t_eval=t[m], rtol=rtol, max_collisions=0)
     P = np.full(dae.shape, np.nan)
@@ -205,7 +190,7 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         sol_s = ode.integrate(p0, t_final, t_eval=ts[ts < tc_ode], rtol=rtol, max_collisions=0)
         Qs = sol_s.segments[0].p
         cs = np.array([ode.crossings(q) for q in Qs])
-        if cs.ndim == 2 and cs.shape[1] == n_fronts:
+        if cs.ndim == 2 and cs.shape[1] == p0.size:
             cs = Qs + ((cs - Qs + 0.5 * L) % L - 0.5 * L)
             cs -= cs.mean(axis=1, keepdims=True)
             rescaled = float(np.max(np.abs(cs - dae[: cs.shape[0]])) / facet_min)
@@ -232,9 +217,58 @@ def compare_fronts(scenario="triangle", alpha=0.1, kstar=5.0, beta=5.0, N=1200, 
         "dae_message": res.message, "ode_message": sol.message,
         "variable_length": variable,
     }
+    if reference_N is not None:
+        summary["dae_spread"] = _dae_spread(sc, alpha, kstar, beta, int(reference_N), t_final,
+                                            tol, method, t, dae, tc_dae, facet_min, fractions)
     p_ode = seg.p - seg.p.mean(axis=1, keepdims=True)
     return FrontComparison(t, dae, P, seg.t, p_ode, float(tc_dae), float(tc_ode), facet_min,
                            error, summary)
+
+
+def _dae_fronts(sc, alpha, kstar, beta, N, t_final, tol, method):
+    """The DAE flow from the scenario's splice, tracked to its first collision.
+
+    Returns ``p0, L, facet_min`` and ``(t, positions, t_c, result, cpu seconds)``
+    (positions: ``kstar/2`` crossings, zero mean, at the snapshots while all fronts live).
+    """
+    from qsa import FiniteDifference
+    from qsa.flows import FacetingFlow, solve_flow
+
+    eq = scenario_splice(sc, alpha, kstar, grid=FiniteDifference(N))
+    p0 = np.array(eq.params["positions"])
+    L = eq.params["L"]
+    n_fronts = p0.size
+    gaps0 = np.diff(np.append(p0, p0[0] + L))
+    facet_min = float(gaps0[1::2].min())
+
+    def stop(t, y, system):
+        return detect_fronts(system.curvature(y), kstar, system.length(y)).n < n_fronts
+
+    start = time.process_time()
+    res = solve_flow(FacetingFlow(alpha, kstar, beta, L), eq.curve.positions(), t_final, N=N,
+                     tol=tol, method=method, callback=stop, progress=False)
+    cpu = time.process_time() - start
+    tracks = track_flow(res, kstar)
+    tc = tracks.first_collision.time if tracks.events else np.nan
+    alive = np.all(np.isfinite(tracks.positions), axis=1)
+    return p0, L, facet_min, (res.t[alive], _centred(tracks.positions[alive], L), tc, res, cpu)
+
+
+def _dae_spread(sc, alpha, kstar, beta, N_ref, t_final, tol, method, t, dae, tc_dae, facet_min,
+                fractions):
+    """How far the DAE at ``N_ref`` is from the compared DAE run (its own resolution error)."""
+    _, _, _, (t2, dae2, tc2, _, _) = _dae_fronts(sc, alpha, kstar, beta, N_ref, t_final, tol,
+                                                  method)
+    m = t < min(tc_dae, tc2)
+    P = np.column_stack([np.interp(t[m], t2, dae2[:, j]) for j in range(dae.shape[1])])
+    err = np.max(np.abs(P - dae[m]), axis=1) / facet_min
+    out = {"N": int(N_ref), "collision": float(tc2),
+           "collision_rel_diff": float(abs(tc2 - tc_dae) / tc_dae),
+           "max_error": float(err.max()) if err.size else np.nan, "error_at": {}}
+    for f in fractions:
+        sel = t[m] <= f * tc_dae
+        out["error_at"][str(f)] = float(err[sel].max()) if np.any(sel) else np.nan
+    return out
 
 
 def _variable_length(p0, L, alpha, kstar, beta, t_final, t, dae, tc_dae, facet_min, fractions,

@@ -72,10 +72,16 @@ def test_reproduce_fronts_cli(tmp_path, capsys):
     reproduce.add_parser(sub)
     png = tmp_path / "f.png"
     args = parser.parse_args(["reproduce", "fronts", "--scenario", "short-facet", "--N", "300",
-                              "--json", "--plot", str(png), "--out", str(tmp_path / "o")])
+                              "--json", "--plot", str(png), "--out", str(tmp_path / "o"),
+                              "--dae-check", "200"])
     assert args.func(args) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["scenario"] == "short-facet" and out["N"] == 300
+    # the DAE against itself at another resolution: close early, diverging at the collision
+    d = out["dae_spread"]
+    assert d["N"] == 200 and d["collision_rel_diff"] < 0.05
+    assert d["error_at"]["0.5"] < 0.02 < d["max_error"]
+    assert d["error_at"]["0.5"] <= d["error_at"]["0.9"] <= d["max_error"]
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert (tmp_path / "o" / "fronts_short-facet.json").exists()
     args = parser.parse_args(["reproduce", "fronts", "--N", "10"])
