@@ -186,7 +186,7 @@ def test_facet_full(tmp_path):
 
 @pytest.mark.slow
 def test_folding_full(tmp_path):
-    """f:fold at Table T1, N = 2400 (3-4.5 min per run; measured sheet pairs 0/2/6).
+    """f:fold at Table T1, N = 2400 (40-63 s per run quiet, 3-4.5 min loaded; sheet pairs 0/2/6).
 
     The flat-sheet separation l* sqrt(a^2 + 1/2) is met on the long sheets of
     rho = 1.3 (median ratio 1.001). rho = 1.4 ends in short curved neck-bulb
