@@ -53,6 +53,11 @@ def add_arguments(parser):
                         help="write fronts_<scenario>.png and .json into DIR")
 
 
+def _errors_to(block):
+    """``"0.03% to 0.50 t_c, ..."`` from a summary block's ``error_at``."""
+    return ", ".join(f"{100 * e:.2f}% to {float(f):.2f} t_c" for f, e in block["error_at"].items())
+
+
 def _report(s):
     lines = [
         f"scenario {s['scenario']}: {s['description']}",
@@ -73,17 +78,15 @@ def _report(s):
                  f"{100 * s['max_error_rescaled']:.2f}%")
     v = s.get("variable_length")
     if v:
-        errs = ", ".join(f"{100 * e:.2f}% to {float(f):.2f} t_c" for f, e in v["error_at"].items())
         lines.append(f"with the length as an unknown (beta={v['beta']}): ODE t_c="
                      f"{v['collision_ode']:.6g} ({100 * v['collision_rel_diff']:.2f}%), "
-                     f"positions {errs}, {100 * v['max_error_separated']:.2f}% while all "
+                     f"positions {_errors_to(v)}, {100 * v['max_error_separated']:.2f}% while all "
                      f"gaps >= 2 d_c, {100 * v['max_error']:.1f}% up to the first "
                      f"collision; CPU {v['time_ode']:.2f} s ({v['speedup']:.0f}x)")
     d = s.get("dae_spread")
     if d:
-        errs = ", ".join(f"{100 * e:.2f}% to {float(f):.2f} t_c" for f, e in d["error_at"].items())
         lines.append(f"the DAE itself, N={d['N']} vs N={s['N']}: t_c={d['collision']:.6g} "
-                     f"({100 * d['collision_rel_diff']:.2f}%), positions {errs}, "
+                     f"({100 * d['collision_rel_diff']:.2f}%), positions {_errors_to(d)}, "
                      f"{100 * d['max_error']:.1f}% up to the first collision")
     lines.append(f"CPU time: DAE {s['time_dae']:.2f} s ({s['n_steps_dae']} steps), ODE "
                  f"{s['time_ode']:.3f} s ({s['nfev_ode']} evaluations): "
