@@ -222,6 +222,14 @@ class ReducedHessian:
         return sum(A.nnz for A in (self.Luu, self.Lyu, self.Lyy, self.cY, self.cU,
                                    self.left, self.right, self.S))
 
+    @property
+    def nbytes(self):
+        """Bytes held by the sparse factors and the low-rank columns."""
+        total = self.U.nbytes + self.V.nbytes
+        for A in (self.Luu, self.Lyu, self.Lyy, self.cY, self.cU, self.left, self.right, self.S):
+            total += A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
+        return total
+
     def _with(self, **changes):
         args = dict(Luu=self.Luu, Lyu=self.Lyu, Lyy=self.Lyy, cY=self.cY, cU=self.cU,
                     left=self.left, right=self.right, S=self.S, U=self.U, V=self.V)
@@ -299,10 +307,31 @@ class ReducedHessian:
                                    matmat=self.__matmul__, dtype=float)
 
     # ------------------------------------------------------------ solutions
-    def augmented(self, sigma=0.0, mass=None):
-        """The sparse saddle-point matrix whose solutions give ``(H - sigma B - U V^T)^{-1}``.
+    def _scalings(self):
+        """``(l, r)`` when ``Lf = diag(l)``, ``Rf = diag(r)`` are invertible diagonals, else None."""
+        out = []
+        for A in (self.left, self.right):
+            if A.shape[0] != A.shape[1] or sp.triu(A, 1).nnz or sp.tril(A, -1).nnz:
+                return None
+            dvec = A.diagonal()
+            if np.any(dvec == 0):
+                return None
+            out.append(dvec)
+        return tuple(out)
 
-        Unknowns ``[x, u, y, mu, v]`` (sizes n, p, m, m, p) and rows
+    def augmented(self, sigma=0.0, mass=None):
+        """The sparse saddle-point matrix of ``(H - sigma B - U V^T) x = b``.
+
+        With invertible diagonal ``Lf = diag(l)``, ``Rf = diag(r)`` (the energies'
+        case) the unknowns are ``[r x, y, mu]`` (sizes p, m, m), the right-hand side
+        ``[b / l, 0, 0]`` and the matrix
+
+            [[diag(1/l) (S0 - sigma B) diag(1/r) + Luu, Lyu^T, cU^T],
+             [Lyu, Lyy, cY^T],
+             [cU, cY, 0]];
+
+        eliminating ``mu`` and ``y = Z (r x)`` leaves ``diag(1/l) (H - sigma B - U V^T) x``.
+        Otherwise the unknowns are ``[x, u, y, mu, v]`` (sizes n, p, m, m, p) and the rows
 
             (S0 - sigma B) x + Lf v = b,       Rf x - u = 0,
             Luu u + Lyu^T y + cU^T mu - v = 0, Lyu u + Lyy y + cY^T mu = 0,
@@ -318,13 +347,24 @@ class ReducedHessian:
 
         Returns
         -------
-        scipy.sparse.csc_matrix, shape (n + 2p + 2m, n + 2p + 2m)
+        scipy.sparse.csc_matrix
+            Square, of size ``p + 2m`` (diagonal scalings) or ``n + 2p + 2m``.
         """
         n, k = self.shape
         if n != k:
             raise ValueError(f"augmented: the matrix must be square, got shape {self.shape}")
         B = sp.identity(n, format="csr") if mass is None else sp.csr_matrix(mass)
+        if B.shape != (n, n):
+            raise ValueError(f"mass must have shape {(n, n)}, got {B.shape}")
         p = self.Luu.shape[0]
+        scal = self._scalings()
+        if scal is not None:
+            lv, rv = scal
+            top = sp.diags(1.0 / lv) @ (self.S - sigma * B) @ sp.diags(1.0 / rv) + self.Luu
+            blocks = [[top, self.Lyu.T, self.cU.T],
+                      [self.Lyu, self.Lyy, self.cY.T],
+                      [self.cU, self.cY, None]]
+            return sp.bmat(blocks, format="csc")
         Ip = sp.identity(p, format="csr")
         blocks = [
             [self.S - sigma * B, None, None, None, self.left],
@@ -336,7 +376,7 @@ class ReducedHessian:
         return sp.bmat(blocks, format="csc")
 
     def shift_invert(self, sigma=0.0, mass=None):
-        """``(H - sigma B)^{-1}`` as a ``LinearOperator`` (one sparse LU, then O(nnz) solves).
+        """``(H - sigma B)^{-1}`` as a ``LinearOperator`` (one sparse LU, then O(fill) solves).
 
         The sparse part is factored through :meth:`augmented`; the low-rank term by the
         Sherman-Morrison-Woodbury formula.
@@ -362,12 +402,17 @@ class ReducedHessian:
             lu = spla.splu(self.augmented(sigma, mass))
         except RuntimeError as err:
             raise ValueError(f"sigma = {sigma}: H - sigma B is singular ({err})") from None
+        scal = self._scalings()
 
         def solve0(b):
             b = np.asarray(b, dtype=float)
             rhs = np.zeros((lu.shape[0],) + b.shape[1:])
-            rhs[:n] = b
-            return lu.solve(rhs)[:n]
+            if scal is None:
+                rhs[:n] = b
+                return lu.solve(rhs)[:n]
+            lv, rv = (v.reshape((-1,) + (1,) * (b.ndim - 1)) for v in scal)
+            rhs[:n] = b / lv
+            return lu.solve(rhs)[:n] / rv
 
         r = self.U.shape[1]
         if r:

@@ -73,8 +73,13 @@ def test_shift_invert(low_rank):
         Bd = np.eye(7) if mass is None else B.toarray()
         x = H.shift_invert(sigma, mass) @ b
         assert np.allclose((D - sigma * Bd) @ x, b)
-    n = H.augmented(0.0).shape[0]
-    assert n == 7 + 2 * 7 + 2 * 5
+    assert H.augmented(0.0).shape[0] == 7 + 2 * 5  # diagonal scalings: the compact system
+    # general left factor: the five-block system
+    G = sp.random(7, 7, density=0.5, random_state=7, format="csr") + 2 * sp.identity(7)
+    HG, DG = G @ H, G.toarray() @ D
+    assert HG.augmented(0.0).shape[0] == 7 + 2 * 7 + 2 * 5
+    x = HG.shift_invert(0.3) @ b
+    assert np.allclose((DG - 0.3 * np.eye(7)) @ x, b)
 
 
 def test_bad_input():

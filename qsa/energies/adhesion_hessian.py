@@ -143,6 +143,30 @@ def cumulative_factors(N):
     return Bd, R.tocsr()
 
 
+class _Entries:
+    """Accumulates ``(rows, cols, vals)`` of a sparse matrix (with optional mirror images)."""
+
+    def __init__(self):
+        self.rows, self.cols, self.vals = [], [], []
+
+    def add(self, r, c, v, mirror=False):
+        self.rows.append(r)
+        self.cols.append(c)
+        self.vals.append(v)
+        if mirror:
+            self.rows.append(c)
+            self.cols.append(r)
+            self.vals.append(v)
+
+    def arrays(self):
+        """Concatenated ``(rows, cols, vals)``."""
+        return tuple(np.concatenate(parts) for parts in (self.rows, self.cols, self.vals))
+
+    def tocsr(self, shape):
+        rows, cols, vals = self.arrays()
+        return sp.coo_matrix((vals, (rows, cols)), shape=shape).tocsr()
+
+
 @dataclass(frozen=True, eq=False)
 class AdhesionDerivatives:
     """The data of the exact first and second derivatives of ``E_A(U)`` at one curve.
@@ -335,38 +359,31 @@ class AdhesionDerivatives:
         return out / (w2 if out.ndim == 1 else w2[:, None])
 
     # ------------------------------------------------------------ assembly
-    def _pair_entries(self):
-        """``(row, col, value)`` of ``K`` in ``(x, y, w)``: each position once."""
+    def _pair_blocks(self):
+        """Entries of ``K``'s blocks ``K_XX`` (2N, 2N), ``K_Xw`` (2N, N), ``K_ww`` (N, N).
+
+        Each a :class:`_Entries` of block-local ``(rows, cols, vals)``; every position
+        occurs once (pairs are unique), so they can be assigned as well as summed.
+        """
         N = self.curve.N
-        i, j = self.i, self.j
+        i, j = self.i.astype(np.int32), self.j.astype(np.int32)  # halves the index memory
         w = self.curve.dsigma
         wi, wj = w[i], w[j]
-        n = np.arange(N)
+        n = np.arange(N, dtype=np.int32)
         both = lambda v: np.bincount(i, v, N) + np.bincount(j, v, N)
-        X, Y, W = 0, N, 2 * N
-        rows, cols, vals = [], [], []
-
-        def put(ro, co, r, cc, v, mirror):
-            rows.append(ro + r)
-            cols.append(co + cc)
-            vals.append(v)
-            if mirror:
-                rows.append(co + cc)
-                cols.append(ro + r)
-                vals.append(v)
-
-        for ro, co, kv in ((X, X, self.kxx), (X, Y, self.kxy), (Y, Y, self.kyy)):
-            put(ro, co, i, j, -kv, ro != co)
-            put(ro, co, j, i, -kv, ro != co)
-            put(ro, co, n, n, both(kv), ro != co)
-        for ro, f in ((X, self.fx), (Y, self.fy)):
-            put(ro, W, i, j, f * wi, True)
-            put(ro, W, j, i, -f * wj, True)
-            put(ro, W, n, n, np.bincount(i, f * wj, N) - np.bincount(j, f * wi, N), True)
-        put(W, W, i, j, self.a2, False)
-        put(W, W, j, i, self.a2, False)
-        put(W, W, n, n, np.full(N, 2.0 * self.A0), False)
-        return rows, cols, vals
+        XX, XW, WW = _Entries(), _Entries(), _Entries()
+        for ro, co, kv in ((0, 0, self.kxx), (0, N, self.kxy), (N, N, self.kyy)):
+            mirror = ro != co
+            XX.add(ro + i, co + j, -kv, mirror)
+            XX.add(ro + j, co + i, -kv, mirror)
+            XX.add(ro + n, co + n, both(kv), mirror)
+        for ro, f in ((0, self.fx), (N, self.fy)):
+            XW.add(ro + i, j, f * wi)
+            XW.add(ro + j, i, -f * wj)
+            XW.add(ro + n, n, np.bincount(i, f * wj, N) - np.bincount(j, f * wi, N))
+        WW.add(i, j, self.a2, True)
+        WW.add(n, n, np.full(N, 2.0 * self.A0))
+        return XX, XW, WW
 
     def pair_hessian(self):
         """``K``, the Hessian of ``E^(X, w)`` in ``(x, y, w)``: sparse, shape (3N, 3N).
@@ -377,16 +394,19 @@ class AdhesionDerivatives:
             Symmetric, ``18 P + 9 N`` stored entries at most.
         """
         N = self.curve.N
-        rows, cols, vals = self._pair_entries()
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows).astype(np.int32),
-                                                     np.concatenate(cols).astype(np.int32))),
-                             shape=(3 * N, 3 * N))
+        XX, XW, WW = (e.tocsr(shape) for e, shape in zip(
+            self._pair_blocks(), ((2 * N, 2 * N), (2 * N, N), (N, N))))
+        return sp.bmat([[XX, XW], [XW.T, WW]], format="csr")
 
     def _dense_pair_hessian(self):
         N = self.curve.N
         K = np.zeros((3 * N, 3 * N))
-        for r, cc, v in zip(*self._pair_entries()):
-            K[r, cc] = v  # every position occurs once
+        XX, XW, WW = self._pair_blocks()
+        for e, ro, co in ((XX, 0, 0), (XW, 0, 2 * N), (WW, 2 * N, 2 * N)):
+            for r, cc, v in zip(e.rows, e.cols, e.vals):
+                K[ro + r, co + cc] = v  # every position occurs once
+                if co != ro:
+                    K[co + cc, ro + r] = v
         return K
 
     def dense_hessian(self) -> np.ndarray:
@@ -449,16 +469,30 @@ class AdhesionDerivatives:
         g, kappa, om = c.g, c.kappa, c.grid.weights
         th = c.theta()
         cs, sn = np.cos(th), np.sin(th)
-        K = self.pair_hessian()
-        Kxx, Kxw, Kww = K[: 2 * N, : 2 * N], K[: 2 * N, 2 * N :], K[2 * N :, 2 * N :]
+        XX, XW, WW = self._pair_blocks()
         d = sp.diags
         O = sp.csr_matrix((N, N))
         Bd, R = cumulative_factors(N)
-        Luu = sp.bmat([[O, d(self.beta)], [d(self.beta), d(om) @ Kww @ d(om)]])
-        Lyu = sp.bmat([[O, d(self.p)], [sp.csr_matrix((2 * N, N)), Kxw @ d(om)]])
-        Lyy = sp.block_diag([d(-g * self.a), Kxx])
+        n = np.arange(N, dtype=np.int32)
+        # L_UU = [[0, beta], [beta, omega K_ww omega]], on (kappa, g)
+        Luu = _Entries()
+        Luu.add(n, N + n, self.beta, True)
+        r, cc, v = WW.arrays()
+        Luu.add(N + r, N + cc, v * om[r] * om[cc])
+        # L_YU = [[0, p], [0, K_Xw omega]], rows (theta, x, y), columns (kappa, g)
+        Lyu = _Entries()
+        Lyu.add(n, N + n, self.p)
+        r, cc, v = XW.arrays()
+        Lyu.add(N + r, N + cc, v * om[cc])
+        # L_YY = diag(-g a, K_XX)
+        Lyy = _Entries()
+        Lyy.add(n, n, -g * self.a)
+        r, cc, v = XX.arrays()
+        Lyy.add(N + r, N + cc, v)
         cY = sp.bmat([[Bd, None, None], [R @ d(g * sn), Bd, None], [R @ d(-g * cs), None, Bd]])
         cU = sp.bmat([[R @ d(-g), R @ d(-kappa)], [O, R @ d(-cs)], [O, R @ d(-sn)]])
+        Luu, Lyu, Lyy = (e.tocsr(shape) for e, shape in (
+            (Luu, (2 * N, 2 * N)), (Lyu, (3 * N, 2 * N)), (Lyy, (3 * N, 3 * N))))
         ds = c.dsigma
         return ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=d(1.0 / np.concatenate([ds, ds])))
 
@@ -470,8 +504,9 @@ class AdhesionDerivatives:
         form : {"auto", "dense", "reduced"}
             ``"dense"``: ndarray (2N, 2N); ``"reduced"``: :class:`~qsa.linalg.ReducedHessian`
             (finite differences). ``"auto"``: reduced on finite-difference grids unless
-            more than a quarter of all node pairs interact (a long-range kernel, where
-            the pair Hessian itself is O(N^2)), dense otherwise.
+            more than half of all node pairs interact (a long-range kernel: the dense
+            assembly, about 300 N^2 bytes at its peak against about 750 bytes per pair
+            for the reduced one, is then the smaller), dense otherwise.
 
         Returns
         -------
@@ -481,7 +516,7 @@ class AdhesionDerivatives:
             raise ValueError(f"form must be one of {HESSIAN_FORMS}, got {form!r}")
         N = self.curve.N
         if form == "auto":
-            sparse = self.curve.grid.sparse and self.n_pairs <= N * (N - 1) // 8
+            sparse = self.curve.grid.sparse and self.n_pairs <= N * (N - 1) // 4
             form = "reduced" if sparse else "dense"
         return self.reduced_hessian() if form == "reduced" else self.dense_hessian()
 
