@@ -58,6 +58,11 @@ class DoubleWell:
         k = np.asarray(k)
         return 0.5 * (6 * k**2 - 6 * k * self.kstar + self.kstar**2)
 
+    def d3W(self, k):
+        """``W'''(k) = 3 (2k - kstar)``, shape like ``k``."""
+        k = np.asarray(k)
+        return 3.0 * (2 * k - self.kstar)
+
 
 @dataclass(frozen=True)
 class Well:
@@ -68,6 +73,9 @@ class Well:
     W, dW, d2W : callable
     kstar : float, optional
         The non-zero well (for constructions that need it).
+    d3W : callable, optional
+        ``W'''``, for energies whose Hessian needs it
+        (:class:`~qsa.energies.FunctionalizedCurvature`).
 
     Examples
     --------
@@ -81,11 +89,14 @@ class Well:
     dW: object
     d2W: object
     kstar: float | None = None
+    d3W: object = None
 
     def __post_init__(self):
         for name in ("W", "dW", "d2W"):
             if not callable(getattr(self, name)):
                 raise ValueError(f"well.{name} must be callable")
+        if self.d3W is not None and not callable(self.d3W):
+            raise ValueError("well.d3W must be callable (or None)")
 
 
 def _as_well(well, kstar):
