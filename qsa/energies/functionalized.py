@@ -101,7 +101,7 @@ class _SquaredPotential:
 
 @dataclass(frozen=True, eq=False)
 class FunctionalizedCurvature(LocalEnergy):
-    """``int (alpha^2 Delta_s kappa - W'(kappa))^2/2 - eta (alpha^2/2 |nabla_s kappa|^2 + W) dsigma``.
+    """``int (alpha^2 Delta_s kappa - W')^2/2 - eta (alpha^2/2 |nabla_s kappa|^2 + W) dsigma``.
 
     See the module docstring for its gradient, its equilibria (faceting pulses) and
     the closed-form circle spectrum.

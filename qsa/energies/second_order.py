@@ -153,7 +153,7 @@ def _call(owner, fn, fname, names, points):
                          f"derivatives ({', '.join(names)}), got {got}")
     return [_check_finite(owner, f"{fname}(q, p, k)[{i}] ({nm})",
                           _values(owner, f"{fname}(q, p, k)[{i}] ({nm})", v, like), points)
-            for i, (nm, v) in enumerate(zip(names, out))]
+            for i, (nm, v) in enumerate(zip(names, out, strict=True))]
 
 
 def _radius(R):
@@ -368,39 +368,39 @@ class SecondOrderDensity:
         _, _, c_q, c_p = self._adjoints(m, f, fq, fp, fk)
         S = grid.sandwich  # S(X, b, Y) = X^T diag(b) Y, None = identity
         E, A, g, ge = m.E, m.A, m.g, m.ge
-        # Jacobians of p (edges) and q (nodes): (kappa block, g block)
+        hstack, vstack = (sp.hstack, sp.vstack) if grid.sparse else (np.hstack, np.vstack)
+        # Jacobians (N x 2N) of p (edges) and q (nodes)
         Jpk = grid.scale_rows(1.0 / ge, E)
         Jpg = -(grid.diag(m.p / ge) if A is None else grid.scale_rows(m.p / ge, A))
-        Jqk = -grid.scale_rows(1.0 / g, E.T @ Jpk)
-        Jqg = grid.scale_rows(1.0 / g, S(E, m.p / ge, A)) - grid.diag(m.q / g)
-        # rows Q and P of T
-        Qk, Qg = _apply(m.L_Q, Jqk), _apply(m.L_Q, Jqg)
-        Pk, Pg = _apply(m.L_P, Jpk), _apply(m.L_P, Jpg)
+        Jp = hstack([Jpk, Jpg])
+        Jq = hstack([-grid.scale_rows(1.0 / g, E.T @ Jpk),
+                     grid.scale_rows(1.0 / g, S(E, m.p / ge, A)) - grid.diag(m.q / g)])
+        Qrow, Prow = _apply(m.L_Q, Jq), _apply(m.L_P, Jp)  # rows Q and P of T
         w, wg = m.w, m.w * m.gam
-        bQQ, bQP, bQK = wg * fqq, wg * fqp, wg * fqk
-        bPP, bPK, bKK = wg * fpp, wg * fpk, wg * fkk
-        bgQ, bgP, bgK = w * fq, w * fp, w * fk
         LK, Lg = m.L_K, m.L_g
-        # H = [[kk, gk^T], [gk, gg]]; "half" terms get their transpose added below
-        kk = (S(Qk, bQQ, Qk) + S(Pk, bPP, Pk) + S(LK, bKK, LK))
-        kk_half = S(Qk, bQP, Pk) + S(LK, bQK, Qk) + S(LK, bPK, Pk)
-        gk = (S(Qg, bQQ, Qk) + S(Pg, bPP, Pk) + S(Qg, bQP, Pk) + S(Pg, bQP, Qk)
-              + S(LK, bQK, Qg).T + S(LK, bPK, Pg).T
-              + S(Lg, bgQ, Qk) + S(Lg, bgP, Pk) + S(Lg, bgK, LK)
-              - S(A, c_p, Jpk) - S(None, c_q, Jqk))
-        gg = S(Qg, bQQ, Qg) + S(Pg, bPP, Pg)
-        gg_half = (S(Qg, bQP, Pg) + S(Lg, bgQ, Qg) + S(Lg, bgP, Pg)
-                   - S(A, c_p, Jpg) - S(None, c_q, Jqg))
-        kk = kk + kk_half + kk_half.T
-        gg = gg + gg_half + gg_half.T
+        # T^T B T over the rows (Q, P): one product of (2N x 2N) matrices
+        T2 = vstack([Qrow, Prow])
+        BT2 = vstack([grid.scale_rows(wg * fqq, Qrow) + grid.scale_rows(wg * fqp, Prow),
+                      grid.scale_rows(wg * fqp, Qrow) + grid.scale_rows(wg * fpp, Prow)])
+        H = T2.T @ BT2
+        # the rows R_K (kappa) and R_gamma (g) against (Q, P), and the second-order terms
+        # X_p, X_q: Y collects them and enters as Y + Y^T
+        YK = S(LK, wg * fqk, Qrow) + S(LK, wg * fpk, Prow)
+        Yg = (S(Lg, w * fq, Qrow) + S(Lg, w * fp, Prow) - S(A, c_p, Jp) - S(None, c_q, Jq)
+              + hstack([S(Lg, w * fk, LK), grid.diag(np.zeros(c.N))]))
+        Y = vstack([YK, Yg])
+        KK = S(LK, wg * fkk, LK)
+        H = H + Y + Y.T
         if grid.sparse:
-            return sp.bmat([[kk, gk.T], [gk, gg]], format="csr")
-        return np.block([[kk, gk.T], [gk, gg]])
+            Z = sp.csr_matrix((c.N, c.N))
+            return (H + sp.bmat([[KK, Z], [Z, Z]])).tocsr()
+        H[: c.N, : c.N] += KK
+        return H
 
 
 @dataclass(frozen=True, eq=False)
 class SecondOrderEnergy(LocalEnergy):
-    """A user-defined second-order energy ``int F(Delta_s kappa, nabla_s kappa, kappa) dsigma`` (e:LIE).
+    """A user-defined energy ``int F(Delta_s kappa, nabla_s kappa, kappa) dsigma`` (e:LIE).
 
     Energy, ``nabla_I E`` (e:first_var), ``V^n`` (e:L2grad) and ``nabla_I^2 E`` are
     those of the discrete energy, exactly (derivation in the module docstring):
