@@ -61,3 +61,13 @@ def test_operators_reexported_from_the_equilibria():
     assert residual_scale is qsa.energies.residual_scale
     assert normal_velocity is qsa.energies.normal_velocity
 
+
+def test_wells_reexported_from_the_equilibria():
+    from qsa.equilibria import _wells
+
+    assert _wells.resolve_well is qsa.energies.resolve_well
+    assert _wells.is_quartic is qsa.energies.is_quartic
+    assert _wells.QuarticWell is qsa.energies.DoubleWell is qsa.energies.QuarticWell
+    assert _wells._positive(2, "alpha") == 2.0
+    with pytest.raises(ValueError, match="alpha must be positive"):
+        _wells._positive(0, "alpha")
