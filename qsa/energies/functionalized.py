@@ -59,21 +59,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from qsa.energies.base import _check_param
-from qsa.energies.faceting import DoubleWell
+from qsa._checks import real_number
 from qsa.energies.local import LocalEnergy, curvature_density, quadratic_gradient_density
 from qsa.energies.second_order import SecondOrderDensity, _radius, circle_eigenvalues
+from qsa.energies.wells import resolve_well
 
 __all__ = ["FunctionalizedCurvature"]
 
 
 def _fc_well(well, kstar):
-    if well is None:
-        return DoubleWell(kstar)
-    for name in ("W", "dW", "d2W", "d3W"):
-        if not callable(getattr(well, name, None)):
-            raise ValueError(f"well must provide callables W, dW, d2W and d3W (the Hessian of "
-                             f"FunctionalizedCurvature needs W'''); {name} is missing")
+    well, _ = resolve_well(well, kstar, equal_depth=False)
+    if not callable(getattr(well, "d3W", None)):
+        raise ValueError("well must provide a callable d3W as well as W, dW and d2W (the "
+                         "Hessian of FunctionalizedCurvature needs W'''); d3W is missing")
     return well
 
 
@@ -99,7 +97,7 @@ class _SquaredPotential:
                 W2**2 - self.well.d3W(k) * Z)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class FunctionalizedCurvature(LocalEnergy):
     """``int (alpha^2 Delta_s kappa - W')^2/2 - eta (alpha^2/2 |nabla_s kappa|^2 + W) dsigma``.
 
@@ -145,9 +143,9 @@ class FunctionalizedCurvature(LocalEnergy):
     well: object = None
 
     def __post_init__(self):
-        object.__setattr__(self, "alpha", _check_param(self.alpha, "alpha", positive=True))
-        object.__setattr__(self, "eta", _check_param(self.eta, "eta"))
-        object.__setattr__(self, "kstar", _check_param(self.kstar, "kstar", positive=True))
+        object.__setattr__(self, "alpha", real_number(self.alpha, "alpha", positive=True))
+        object.__setattr__(self, "eta", real_number(self.eta, "eta"))
+        object.__setattr__(self, "kstar", real_number(self.kstar, "kstar", positive=True))
         object.__setattr__(self, "well", _fc_well(self.well, self.kstar))
 
     def densities(self):

@@ -398,7 +398,7 @@ class SecondOrderDensity:
         return H
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class SecondOrderEnergy(LocalEnergy):
     """A user-defined energy ``int F(Delta_s kappa, nabla_s kappa, kappa) dsigma`` (e:LIE).
 

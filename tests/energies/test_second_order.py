@@ -1,6 +1,8 @@
 """SecondOrderEnergy and FunctionalizedCurvature: exact discrete derivatives, e:first_var,
 e:LIE_NV, e:W-invar, the first-order special case and bad input."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -144,6 +146,22 @@ def test_functionalized_is_squared_potential_minus_eta_faceting():
         assert np.abs(E.gradient(c) - ref).max() <= 1e-12 * np.abs(ref).max()
         Href = to_dense(Zsq.hessian(c)) - eta * to_dense(F.hessian(c))
         assert np.abs(to_dense(E.hessian(c)) - Href).max() <= 1e-12 * np.abs(Href).max()
+
+
+def test_models_are_frozen_and_equal_by_value():
+    E = FunctionalizedCurvature(0.1, 1, 5)
+    assert dataclasses.is_dataclass(E) and E == FunctionalizedCurvature(alpha=0.1, eta=1.0,
+                                                                        kstar=5.0,
+                                                                        well=DoubleWell(5.0))
+    assert hash(E) == hash(FunctionalizedCurvature(0.1, 1.0, 5.0))
+    assert E.params() == {"energy": "FunctionalizedCurvature", "alpha": 0.1, "eta": 1.0,
+                          "kstar": 5.0}
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        E.eta = 2.0
+    S = SecondOrderEnergy(_ok_F, _ok_dF, _ok_d2F)
+    assert S == SecondOrderEnergy(_ok_F, _ok_dF, _ok_d2F) and S.placement == "node"
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        S.placement = "edge"
 
 
 def test_double_well_third_derivative():
