@@ -6,15 +6,7 @@ import pytest
 from qsa import Curve, Fourier, geometry
 from qsa.energies import Adhesion, AdhesionKernel
 from qsa.energies.adhesion import adhesion_fields
-from tests.helpers import inner
-
-
-def random_curve(seed, grid):
-    rng = np.random.default_rng(seed)
-    a = rng.normal(0, 0.08, 4)
-    b = rng.normal(0, 0.08, 4)
-    return Curve.polar(lambda t: 1 + sum(a[k] * np.cos((k + 2) * t) + b[k] * np.sin((k + 2) * t)
-                                         for k in range(4)), grid)
+from tests.helpers import inner, random_curve
 
 
 @pytest.mark.parametrize("l_star", [0.5, 0.15])

@@ -16,19 +16,11 @@ from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.energies.adhesion import AdhesionKernel, dense_pairs
 from qsa.energies.adhesion_hessian import adhesion_derivatives, cumulative_factors
 from qsa.linalg import ReducedHessian, to_dense
-from tests.helpers import assert_gradient_matches_energy, inner
+from tests.helpers import assert_gradient_matches_energy, inner, random_curve
 
 GRIDS = {"fourier": Fourier(101), "fd": FiniteDifference(200)}
 #: (l*, method): the cutoff removes most pairs / some pairs / the all-pairs path
 CASES = {"short": (0.05, "neighbours"), "medium": (0.15, "neighbours"), "long": (0.5, "dense")}
-
-
-def random_curve(seed, grid):
-    rng = np.random.default_rng(seed)
-    a = rng.normal(0, 0.08, 4)
-    b = rng.normal(0, 0.08, 4)
-    return Curve.polar(lambda t: 1 + sum(a[k] * np.cos((k + 2) * t) + b[k] * np.sin((k + 2) * t)
-                                         for k in range(4)), grid)
 
 
 def off_manifold(c, seed):
