@@ -1,4 +1,4 @@
-"""The paper's simulation scenarios: parameters and initial data.
+"""The paper's scenarios: parameters and initial data of every reproduction.
 
 * :class:`FacetScenario` -- faceting coarsening (figures f:facet and
   f:facet_energy): alpha = 0.1, beta = 5, kappa* = 5, 600 points, a slightly
@@ -9,23 +9,34 @@
   A0 = 40, beta = 60, eps = 0.08) from the 13-fold crenellated start
   ``r = 0.6 (1 + 0.4 tanh(3 cos 13 theta) / tanh 3)`` (figures f:Snowflake,
   rho = 1.3, and f:fold, rho = 1.2, 1.3, 1.4 from identical data).
+* :class:`ConvergenceScenario` (:data:`CONVERGENCE`) -- the appendix's CHA
+  example (eps = 0.1, beta = 1, rho = 1.5, A0 = 10, l* = 1/2, a = 1) from
+  ``r = 1 + 0.35 cos 3 theta`` (+ 0.05 sin 4 theta in x): Table ap:t1 and the
+  time-step counts.
+* :class:`Scenario` (:data:`SCENARIOS`) -- rounded polygons for the
+  front-position reduction (``qsa reproduce fronts``).
 
-Scenarios are frozen dataclasses; ``initial()`` returns equal-chord nodes
-``(x, y)`` (the DAE's discrete scaled arc length, ap:scaled) with the first
-node on the positive x axis, and ``model()`` the flow model.
+Scenarios are frozen dataclasses that carry all their parameters; ``model()``
+returns the flow model and ``initial()`` (``samples()`` for the appendix
+example, ``splice()`` for a polygon) the initial data. The CHA and faceting
+``initial()`` return equal-chord nodes ``(x, y)`` (the DAE's discrete scaled
+arc length, ap:scaled) with the first node on the positive x axis.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from qsa.equilibria import splice_polygon
 from qsa.flows.models import CHA, FacetingFlow
 from qsa.resample import resample_closed
 
-__all__ = ["FacetScenario", "CHAScenario", "crenellated_radius", "perturbed_circle_radius"]
+__all__ = ["FacetScenario", "CHAScenario", "FoldBalance", "ConvergenceScenario", "CONVERGENCE",
+           "Scenario", "SCENARIOS", "front_scenario", "scenario_splice", "crenellated_radius",
+           "perturbed_circle_radius"]
 
 #: oversampling of the analytic curve before resampling to equal chords
 _FINE = 8
@@ -37,7 +48,7 @@ def perturbed_circle_radius(R, noise, modes, seed):
     Every mode has the same amplitude ``noise``; the phases ``phi_k`` are
     uniform on ``[0, 2 pi)``, drawn in order of ``k`` from
     ``numpy.random.default_rng(seed)``. Equal amplitudes leave the selection of
-    the spinodal wavenumber to the growth rates (MATH.md section 4: on the
+    the spinodal wavenumber to the growth rates (on the
     circle ``lambda_k = -((k^2 - 1)^2 / R^4)(alpha^2 k^2 / R^2 + W''(1/R))``).
     """
     k0, k1 = int(modes[0]), int(modes[1])
@@ -132,6 +143,26 @@ class FacetScenario:
 
 
 @dataclass(frozen=True)
+class FoldBalance:
+    """Energy balance of one fold of paired sheets (:meth:`CHAScenario.fold_balance`).
+
+    Attributes
+    ----------
+    pair_gain_per_length : float
+        Adhesion energy gained per unit length of two sheets at the optimal separation.
+    hairpin_energy : float
+        Bending energy of the half-circle joining them.
+    fold_length : float
+        ``hairpin_energy / pair_gain_per_length``: the paired length over which a fold
+        pays for itself.
+    """
+
+    pair_gain_per_length: float
+    hairpin_energy: float
+    fold_length: float
+
+
+@dataclass(frozen=True)
 class CHAScenario:
     """Canham-Helfrich adhesion-repulsion from the crenellated start (Table T:T1).
 
@@ -162,9 +193,9 @@ class CHAScenario:
       l* = 0.1 but at the 0.01 scale; run to t = 0.01 only): the 13 teeth zip
       into 13 thin symmetric spikes of paired sheets at exactly
       l* sqrt(a^2 + 1/2) (ratio 1.000), no symmetry breaking by t = 0.01;
-    * the clock: the paper's code advances by k per pass of two steps
-      (MATH.md section 7), so its t = 2.5 is physical time ~5 -- a time
-      rescaling, not a change of shape.
+    * the clock: the paper's code advances by k per pass of two steps of k,
+      so its t = 2.5 is physical time ~5 -- a time rescaling, not a change
+      of shape.
 
     None changes the morphology. The cause is the length scale: a hairpin
     of two sheets at the optimal separation ``d = l* sqrt(a^2 + 1/2)``
@@ -260,17 +291,181 @@ class CHAScenario:
 
         Returns
         -------
-        dict
-            ``pair_gain_per_length``, ``hairpin_energy``, ``fold_length``.
+        FoldBalance
+
+        Examples
+        --------
+        >>> round(CHAScenario(l_star=0.1).fold_balance().fold_length, 3)
+        0.649
         """
         d = self.pair_separation()
         gain = (2 * math.sqrt(math.pi) * self.A0 * self.l_star
                 * math.exp(-self.a**2 - 0.5) / self.a**2)
         hairpin = math.pi * self.eps / d
-        return {"pair_gain_per_length": gain, "hairpin_energy": hairpin,
-                "fold_length": hairpin / gain}
+        return FoldBalance(gain, hairpin, hairpin / gain)
 
     def pair_separation(self):
-        """The optimal near-contact separation ``l* sqrt(a^2 + 1/2)`` (MATH.md section 6)."""
+        """The optimal near-contact separation ``l* sqrt(a^2 + 1/2)`` (s:NSI)."""
         return self.l_star * math.sqrt(self.a**2 + 0.5)
 
+
+
+@dataclass(frozen=True)
+class ConvergenceScenario:
+    """The appendix's CHA example: Table ap:t1 and the time-step counts.
+
+    CHA flow (e:CHA-GF) with ``eps = 0.1, beta = 1, rho = 1.5, A0 = 10,
+    l* = 1/2, a = 1`` from ``r = 1 + 0.35 cos 3 theta`` with ``0.05 sin 4 theta``
+    added to x, backward Euler with step doubling at ``tol``, to physical time
+    ``t_final = 0.2``: the paper's code advances its clock by k per accepted pass
+    of two steps of k, so the table's "t = 0.1" is physical time 0.2.
+
+    ``paper_differences`` is Table ap:t1 (max-norm difference of the node
+    positions of N and 2N at common nodes, componentwise); ``paper_steps`` the
+    appendix's step counts at ``N = 100`` for tolerances 1e-3 ... 1e-6.
+
+    Examples
+    --------
+    >>> sc = ConvergenceScenario()
+    >>> sc.model().l_star, sc.paper_differences[50]
+    (0.5, 0.1909)
+    >>> x, y = sc.samples(400)
+    >>> x.shape, round(float(x[0]), 2)
+    ((400,), 1.35)
+    """
+
+    eps: float = 0.1
+    beta: float = 1.0
+    rho: float = 1.5
+    A0: float = 10.0
+    l_star: float = 0.5
+    a: float = 1.0
+    t_final: float = 0.2
+    tol: float = 1e-4
+    #: resolutions of the convergence table (differences N vs 2N for all but the last)
+    Ns: tuple = (50, 100, 200, 400, 800)
+    #: samples of the analytic curve handed to the flow (resampled to equal chords there)
+    n_samples: int = 4000
+    #: nodes of the time-step study
+    N_steps: int = 100
+    name: str = field(default="convergence")
+
+    @property
+    def paper_differences(self):
+        """Table ap:t1: ``{N: max |X(2N) - X(N)|}`` at tol 1e-4."""
+        return {50: 0.1909, 100: 0.0397, 200: 0.0101, 400: 0.0024}
+
+    @property
+    def paper_steps(self):
+        """The appendix's accepted steps at ``N = 100``: ``{tol: steps}``."""
+        return {1e-3: 65, 1e-4: 180, 1e-5: 571, 1e-6: 1811}
+
+    def model_params(self):
+        """The CHA parameters as keyword arguments of :class:`qsa.flows.CHA`."""
+        return dict(eps=self.eps, beta=self.beta, rho=self.rho, A0=self.A0,
+                    l_star=self.l_star, a=self.a)
+
+    def model(self, force_normal="unit"):
+        """The CHA model; ``force_normal="centred"`` is the paper code's adhesion normal."""
+        return CHA(**self.model_params(), force_normal=force_normal)
+
+    def samples(self, M=None):
+        """``M`` samples of the initial curve at equal theta (default ``n_samples``), shape (M,)."""
+        M = self.n_samples if M is None else int(M)
+        th = 2 * np.pi * np.arange(M) / M
+        r = 1 + 0.35 * np.cos(3 * th)
+        return r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th)
+
+    def params(self):
+        d = asdict(self)
+        d["Ns"] = list(self.Ns)
+        return d
+
+
+#: The appendix's convergence example with the paper's parameters.
+CONVERGENCE = ConvergenceScenario()
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A rounded polygon for the front-position reduction (``qsa reproduce fronts``).
+
+    Attributes
+    ----------
+    name, description : str
+    angles : tuple of float
+        Exterior corner angles in degrees (summing to 360).
+    facets : tuple of float
+        Requested facet lengths (closed by :func:`qsa.equilibria.splice_polygon`).
+    t_final : float
+        A little after the first collision.
+    alpha, kstar, beta : float
+        Faceting energy (front width, corner curvature) and perimeter penalty.
+
+    Examples
+    --------
+    >>> sq = Scenario.regular(4, 0.35)
+    >>> sq.name, sq.angles
+    ('regular-4', (90.0, 90.0, 90.0, 90.0))
+    >>> SCENARIOS["triangle"].alpha
+    0.1
+    """
+
+    name: str
+    angles: tuple
+    facets: tuple
+    description: str
+    t_final: float
+    alpha: float = 0.1
+    kstar: float = 5.0
+    beta: float = 5.0
+
+    @classmethod
+    def regular(cls, n_corners, facet, alpha=0.1, kstar=5.0, beta=5.0, t_final=1.0):
+        """The regular polygon with ``n_corners`` equal facets of length ``facet``."""
+        n = int(n_corners)
+        if n < 2:
+            raise ValueError(f"n_corners must be at least 2, got {n_corners!r}")
+        return cls(f"regular-{n}", (360.0 / n,) * n, (float(facet),) * n,
+                   f"regular polygon with {n} corners, facets {facet:g}", t_final, alpha,
+                   kstar, beta)
+
+    def splice(self, grid=None):
+        """The closed splice of this polygon (:func:`qsa.equilibria.splice_polygon`)."""
+        return splice_polygon(np.deg2rad(self.angles), self.facets, self.alpha,
+                              kstar=self.kstar, grid=grid)
+
+
+#: Built-in scenarios of ``qsa reproduce fronts`` (alpha = 0.1, kstar = 5, beta = 5).
+SCENARIOS = {
+    "triangle": Scenario(
+        "triangle", (130.0, 120.0, 110.0), (0.3, 0.4, 0.5),
+        "triangle with unequal sides relaxing: the shortest facet collapses", 3.2),
+    "short-facet": Scenario(
+        "short-facet", (90.0, 90.0, 80.0, 100.0), (0.5, 0.28, 0.5, 0.35),
+        "quadrilateral (right trapezoid) with one short facet that collapses", 0.09),
+}
+
+
+def front_scenario(scenario, **overrides):
+    """A :class:`Scenario` from its name in :data:`SCENARIOS` or itself, with ``overrides``.
+
+    ``overrides`` whose value is None are ignored (the scenario's value is kept).
+    """
+    if isinstance(scenario, str):
+        if scenario not in SCENARIOS:
+            raise ValueError(f"scenario must be one of {sorted(SCENARIOS)} or a Scenario, "
+                             f"got {scenario!r}")
+        scenario = SCENARIOS[scenario]
+    elif not isinstance(scenario, Scenario):
+        raise ValueError(f"scenario must be a name or a Scenario, got {scenario!r}")
+    changes = {k: float(v) for k, v in overrides.items() if v is not None}
+    return replace(scenario, **changes) if changes else scenario
+
+
+def scenario_splice(scenario, alpha=None, kstar=None, grid=None):
+    """The closed splice of a scenario (:func:`qsa.equilibria.splice_polygon`).
+
+    ``alpha``, ``kstar``: the scenario's unless given.
+    """
+    return front_scenario(scenario, alpha=alpha, kstar=kstar).splice(grid)
