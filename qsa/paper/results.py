@@ -18,20 +18,11 @@ import numpy as np
 
 from qsa._version import __version__
 from qsa.flows.analysis import SheetPairs
+from qsa.io import json_default
 from qsa.paper.scenarios import CHAScenario, FacetScenario
 
 __all__ = ["CoarseningEvent", "Coarsening", "coarsening_events", "FacetState", "FacetRun",
-           "Crossing", "SelfIntersectionReport", "CHARun", "FoldingRun", "ResolutionCheck",
-           "json_default"]
-
-
-def json_default(value):
-    """``json.dump(default=...)`` for NumPy scalars and arrays."""
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+           "Crossing", "SelfIntersectionReport", "CHARun", "FoldingRun", "ResolutionCheck"]
 
 
 class _Summarised:
