@@ -422,7 +422,11 @@ class Scenario:
 
     @classmethod
     def regular(cls, n_corners, facet, alpha=0.1, kstar=5.0, beta=5.0, t_final=1.0):
-        """The regular polygon with ``n_corners`` equal facets of length ``facet``."""
+        """The regular polygon with ``n_corners`` equal facets of length ``facet``.
+
+        An equilibrium by symmetry (up to exponentially small terms), the state of
+        :func:`qsa.paper.compare_eigenvalues`; ``t_final`` only matters for a flow from it.
+        """
         n = int(n_corners)
         if n < 2:
             raise ValueError(f"n_corners must be at least 2, got {n_corners!r}")
