@@ -2,13 +2,18 @@
 
 Each energy provides ``energy``, ``gradient`` (nabla_I E in <f,h> = int f h dsigma),
 ``normal_velocity`` (outward V^n) and ``hessian`` (nabla_I^2 E); energies add with ``+``.
+On the closed manifold, ``normal_velocity``, ``multipliers`` (Lambda of
+``nabla_I E = Lambda . Psi``) and ``residual_scale`` are functions of the energy
+(:mod:`qsa.energies.constrained`); the double wells are in :mod:`qsa.energies.wells`.
 """
 
 from qsa.energies.adhesion import Adhesion, AdhesionKernel
 from qsa.energies.base import Energy, EnergySum, Perimeter
-from qsa.energies.faceting import DoubleWell, Faceting, Well
+from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
+from qsa.energies.faceting import Faceting
 from qsa.energies.helfrich import CanhamHelfrich
 from qsa.energies.local import Density, FirstOrderEnergy, LocalEnergy
+from qsa.energies.wells import DoubleWell, QuarticWell, Well, is_quartic, resolve_well
 
 __all__ = [
     "Adhesion",
@@ -17,10 +22,16 @@ __all__ = [
     "EnergySum",
     "Perimeter",
     "DoubleWell",
+    "QuarticWell",
     "Well",
+    "is_quartic",
+    "resolve_well",
     "Faceting",
     "CanhamHelfrich",
     "Density",
     "FirstOrderEnergy",
     "LocalEnergy",
+    "multipliers",
+    "normal_velocity",
+    "residual_scale",
 ]

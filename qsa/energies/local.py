@@ -32,8 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from qsa._checks import real_number
 from qsa.curve import Curve
-from qsa.energies.base import Energy, _check_param
+from qsa.energies.base import Energy
 
 __all__ = ["Density", "LocalEnergy", "FirstOrderEnergy"]
 
@@ -278,6 +279,40 @@ class LocalEnergy(Energy):
             return (sp.diags(winv) @ H).tocsr()
         return H * winv[:, None]
 
+    def gradient_parts(self, c):
+        """``nabla_I`` of each density term separately, in ``<f, h> = int f h dsigma``.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        tuple of ndarray, each shape (2N,)
+            One per :meth:`densities` entry; they add up to :meth:`gradient`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import Faceting
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> smooth, well = Faceting(0.1, 5.0).gradient_parts(c)  # |p|^2 vanishes on a circle
+        >>> bool(np.allclose(smooth, 0)), bool(np.allclose(well[:17], 6.0))  # W'(1) = 6
+        (True, True)
+        """
+        return tuple(_OneDensity(d).gradient(c) for d in self.densities())
+
+
+class _OneDensity(LocalEnergy):
+    """One density term of a local energy, as an energy of its own."""
+
+    def __init__(self, density: Density):
+        self._density = density
+
+    def densities(self):
+        return (self._density,)
+
 
 class FirstOrderEnergy(LocalEnergy):
     """A user-defined first-order energy ``int F(nabla_s kappa, kappa) dsigma``.
@@ -311,7 +346,7 @@ class FirstOrderEnergy(LocalEnergy):
 
 def quadratic_gradient_density(coef: float) -> Density:
     """``coef/2 |p|^2`` on edges."""
-    coef = _check_param(coef, "coefficient", nonnegative=True)
+    coef = real_number(coef, "coefficient", nonnegative=True)
     zero = lambda p, k: np.zeros_like(p)
     return Density(f=lambda p, k: 0.5 * coef * p**2, f_p=lambda p, k: coef * p, f_k=zero,
                    f_pp=lambda p, k: np.full_like(p, coef), f_pk=zero, f_kk=zero,
