@@ -301,6 +301,8 @@ class Grid:
         """
         b = np.asarray(b, dtype=float)
         if Y is None:
+            if X is not None and not sp.issparse(X):
+                return X.T * b[None, :]  # X^T diag(b) without a dense O(N^3) product
             right = self.diag(b)
         else:
             right = self.scale_rows(b, Y)

@@ -1,6 +1,7 @@
 """Double-well potentials ``W(kappa)`` of the faceting energy (e:Facet) and their resolver.
 
-A *well* is any object with vectorised callables ``W(k)``, ``dW(k)``, ``d2W(k)``.
+A *well* is any object with vectorised callables ``W(k)``, ``dW(k)``, ``d2W(k)``
+(and ``d3W(k)`` for :class:`~qsa.energies.FunctionalizedCurvature`).
 The default is the quartic :class:`DoubleWell` ``W = k^2 (k - kstar)^2 / 4``
 (wells at 0 and ``kstar``, ``W''(0) = W''(kstar) = kstar^2 / 2``), for which the
 equilibrium constructions have closed forms; :func:`is_quartic` tells it apart
@@ -63,6 +64,11 @@ class DoubleWell:
         k = np.asarray(k)
         return 0.5 * (6 * k**2 - 6 * k * self.kstar + self.kstar**2)
 
+    def d3W(self, k):
+        """``W'''(k) = 3 (2k - kstar)``, shape like ``k``."""
+        k = np.asarray(k)
+        return 3.0 * (2 * k - self.kstar)
+
 
 #: The quartic double well under the name the equilibrium constructions use.
 QuarticWell = DoubleWell
@@ -77,6 +83,9 @@ class Well:
     W, dW, d2W : callable
     kstar : float, optional
         The non-zero well (for constructions that need it).
+    d3W : callable, optional
+        ``W'''``, for energies whose Hessian needs it
+        (:class:`~qsa.energies.FunctionalizedCurvature`).
 
     Examples
     --------
@@ -90,11 +99,14 @@ class Well:
     dW: object
     d2W: object
     kstar: float | None = None
+    d3W: object = None
 
     def __post_init__(self):
         for name in ("W", "dW", "d2W"):
             if not callable(getattr(self, name)):
                 raise ValueError(f"well.{name} must be callable")
+        if self.d3W is not None and not callable(self.d3W):
+            raise ValueError("well.d3W must be callable (or None)")
 
 
 def is_quartic(well, kstar) -> bool:
