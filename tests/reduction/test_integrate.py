@@ -1,6 +1,7 @@
 """Integration of the front ODE through collisions; collision distance and sensitivity."""
 
 import numpy as np
+import pytest
 
 from qsa.equilibria import splice_polygon
 from qsa.reduction.integrate import (
@@ -12,6 +13,14 @@ from qsa.reduction.integrate import (
 from qsa.reduction.ode import FrontODE
 
 ALPHA, KSTAR = 0.1, 5.0
+
+
+@pytest.fixture(scope="module")
+def trapezoid():
+    """A splice with a short facet [p_4, p_5] (0-based 3, 4)."""
+    eq = splice_polygon(np.deg2rad([90, 90, 80, 100]), [0.5, 0.28, 0.5, 0.35], ALPHA,
+                        kstar=KSTAR)
+    return FrontODE(ALPHA, KSTAR, eq.params["L"]), np.array(eq.params["positions"])
 
 
 def test_collision_distance_quartic():
@@ -33,11 +42,8 @@ def test_collision_sensitivity_exact_for_pair_law():
                       rtol=1e-2)
 
 
-def test_integrate_removes_pair_and_recloses():
-    eq = splice_polygon(np.deg2rad([90, 90, 80, 100]), [0.5, 0.28, 0.5, 0.35], ALPHA,
-                        kstar=KSTAR)
-    p = np.array(eq.params["positions"])
-    ode = FrontODE(ALPHA, KSTAR, eq.params["L"])
+def test_integrate_removes_pair_and_recloses(trapezoid):
+    ode, p = trapezoid
     r = ode.integrate(p, 0.08, rtol=1e-6, max_collisions=1)
     assert r.success and len(r.events) >= 1
     ev = r.first_collision
@@ -111,12 +117,9 @@ def test_auto_method_picks_radau_only_for_a_stiff_perimeter_mode():
         assert auto != diff.first_collision.time
 
 
-def test_result_types_and_stop_after_max_collisions():
+def test_result_types_and_stop_after_max_collisions(trapezoid):
     """Segments, events and the track-indexed positions of a run stopped by max_collisions."""
-    eq = splice_polygon(np.deg2rad([90, 90, 80, 100]), [0.5, 0.28, 0.5, 0.35], ALPHA,
-                        kstar=KSTAR)
-    p = np.array(eq.params["positions"])
-    ode = FrontODE(ALPHA, KSTAR, eq.params["L"])
+    ode, p = trapezoid
     r = ode.integrate(p, 0.08, rtol=1e-5, max_collisions=0)
     assert r.status == 1 and r.success and "stopped after collision" in r.message
     assert len(r.events) == 1 and len(r.segments) == 1
