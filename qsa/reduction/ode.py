@@ -56,8 +56,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from qsa.energies.wells import resolve_well
 from qsa.equilibria import heteroclinic
-from qsa.equilibria._wells import resolve_well
 from qsa.equilibria.splice import SpliceProfile, default_cutoff
 from qsa.reduction import manifold
 from qsa.reduction.backends import NumpyBackend, select_backend
