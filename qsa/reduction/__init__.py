@@ -6,12 +6,15 @@ The front-position ODE ``p' = F(p)`` on the manifold of heteroclinic splices
 manifold's fields (:mod:`qsa.reduction.manifold`, with the derivation of the metric),
 the optional slow-manifold correction of the force (:mod:`qsa.reduction.correction`),
 a numpy or compiled evaluation (:mod:`qsa.reduction.backends`) and the integration
-through collisions (:mod:`qsa.reduction.integrate`); :mod:`qsa.reduction.compare`
-validates it against the DAE flow and the full linearization (``qsa reproduce fronts``).
+through collisions (:mod:`qsa.reduction.integrate`). Its validation against the DAE
+flow and the full linearization (``qsa reproduce fronts``) is :mod:`qsa.paper.fronts`;
+``SCENARIOS``, ``compare_fronts`` and ``compare_eigenvalues`` stay importable from here
+as aliases.
 """
 
+import importlib
+
 from qsa.reduction.backends import FrontEvaluation
-from qsa.reduction.compare import SCENARIOS, compare_eigenvalues, compare_fronts
 from qsa.reduction.fronts import (
     CoarseningEvent,
     Fronts,
@@ -34,3 +37,13 @@ __all__ = ["CoarseningEvent", "Fronts", "FrontTracks", "detect_fronts", "track_f
            "track_fronts", "FrontODE", "FrontODEResult", "collision_distance",
            "collision_sensitivity", "SCENARIOS", "compare_fronts", "compare_eigenvalues",
            "FrontEvaluation", "ODECollision", "ODESegment", "SpliceFields"]
+
+#: aliases of qsa.paper, resolved on first use (qsa.paper imports this package)
+_PAPER_ALIASES = {"SCENARIOS": "qsa.paper.scenarios", "compare_fronts": "qsa.paper.fronts",
+                  "compare_eigenvalues": "qsa.paper.fronts"}
+
+
+def __getattr__(name):
+    if name in _PAPER_ALIASES:
+        return getattr(importlib.import_module(_PAPER_ALIASES[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

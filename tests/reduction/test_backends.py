@@ -11,8 +11,8 @@ import pytest
 
 import qsa.reduction
 from qsa.equilibria import close_positions
+from qsa.paper import SCENARIOS, scenario_splice
 from qsa.reduction.backends import FrontEvaluation, NumpyBackend
-from qsa.reduction.compare import SCENARIOS, scenario_splice
 from qsa.reduction.ode import FrontODE
 
 try:

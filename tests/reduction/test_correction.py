@@ -5,6 +5,7 @@ import pytest
 
 from qsa.equilibria import SpliceProfile, default_cutoff, heteroclinic
 from qsa.equilibria.splice import polygon_positions
+from qsa.paper import scenario_splice
 from qsa.reduction.correction import (
     D2_STENCIL,
     folded_band,
@@ -108,8 +109,6 @@ def test_slow_correction_is_a_newton_step(triangle):
 
 
 def _correction_errors(ppw, state):
-    from qsa.reduction.compare import scenario_splice
-
     eq = scenario_splice(state)
     p, L, cut = np.array(eq.params["positions"]), eq.params["L"], tuple(eq.params["cutoff"])
     ode = FrontODE(ALPHA, KSTAR, L, correction="newton", points_per_width=ppw)
@@ -148,7 +147,6 @@ def test_newton_correction_matches_dae_collision_time():
     """Short facet: the corrected force closes the facet at the DAE's (stiff-perimeter) rate."""
     from qsa import FiniteDifference
     from qsa.flows import FacetingFlow, solve_flow
-    from qsa.reduction.compare import scenario_splice
     from qsa.reduction.fronts import detect_fronts, track_flow
 
     eq = scenario_splice("short-facet", ALPHA, KSTAR, grid=FiniteDifference(600))

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from qsa.equilibria import splice_polygon
+from qsa.paper import SCENARIOS, scenario_splice
 from qsa.reduction.integrate import (
     ODECollision,
     ODESegment,
@@ -18,8 +19,7 @@ ALPHA, KSTAR = 0.1, 5.0
 @pytest.fixture(scope="module")
 def trapezoid():
     """A splice with a short facet [p_4, p_5] (0-based 3, 4)."""
-    eq = splice_polygon(np.deg2rad([90, 90, 80, 100]), [0.5, 0.28, 0.5, 0.35], ALPHA,
-                        kstar=KSTAR)
+    eq = scenario_splice("short-facet", ALPHA, KSTAR)
     return FrontODE(ALPHA, KSTAR, eq.params["L"]), np.array(eq.params["positions"])
 
 
@@ -85,8 +85,6 @@ def test_variable_length_implicit_matches_explicit():
     The approximate Jacobian only steers Radau's Newton iterations; a wrong one would
     show as failed or wandering steps. Short facet, beta = 5 (mildly stiff: RK45 copes).
     """
-    from qsa.reduction.compare import scenario_splice
-
     eq = scenario_splice("short-facet")
     p, L = np.array(eq.params["positions"]), eq.params["L"]
     ode = FrontODE(ALPHA, KSTAR, L, beta=5.0)
@@ -103,8 +101,6 @@ def test_auto_method_picks_radau_only_for_a_stiff_perimeter_mode():
     Same choice -> same step sequence -> identical collision times; and the other method
     would give a different one (the test can tell them apart).
     """
-    from qsa.reduction.compare import SCENARIOS, scenario_splice
-
     for name, expected, other in (("short-facet", "RK45", "Radau"), ("triangle", "Radau", "RK45")):
         eq = scenario_splice(name)
         p, L = np.array(eq.params["positions"]), eq.params["L"]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from qsa.equilibria import heteroclinic
-from qsa.reduction.compare import scenario_splice
+from qsa.paper import scenario_splice
 from qsa.reduction.manifold import (
     PeriodicQuadrature,
     SpliceFields,

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from qsa.equilibria import splice_closure, splice_polygon
+from qsa.paper import SCENARIOS
 from qsa.reduction.manifold import closure, energy_gradient, length_derivatives
 from qsa.reduction.ode import FrontODE
 
@@ -115,8 +116,7 @@ def test_bad_input(triangle):
         ode.integrate(p, -1.0)
 
 
-@pytest.mark.parametrize("angles, facets", [([130, 120, 110], [0.3, 0.4, 0.5]),
-                                            ([90, 90, 80, 100], [0.5, 0.28, 0.5, 0.35])])
+@pytest.mark.parametrize("angles, facets", [(s.angles, s.facets) for s in SCENARIOS.values()])
 def test_galerkin_identity_with_full_normal_velocity(angles, facets):
     # <V^n, phi_j^perp> = -dE/dp_j on the tangent space: V^n from qsa.energies (e:Facet-NV)
     # on the splice curve, phi from the ODE's own pull-back -- independent code paths
