@@ -35,6 +35,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.interpolate import CubicSpline
 
+from qsa._checks import integer
+
 __all__ = ["Grid", "FiniteDifference", "Fourier", "MIN_NODES"]
 
 #: Smallest number of nodes a grid accepts.
@@ -42,12 +44,9 @@ MIN_NODES = 8
 
 
 def _check_N(N, kind):
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)):
-        raise ValueError(f"N must be an integer number of nodes, got {N!r}")
-    N = int(N)
-    if N < MIN_NODES:
-        raise ValueError(f"N={N} is too small for a {kind} grid: need N >= {MIN_NODES}")
-    return N
+    return integer(N, "N", minimum=MIN_NODES, what="number of nodes",
+                   too_small="{name}={value} is too small for a " + kind
+                   + " grid: need {name} >= {minimum}")
 
 
 def _as_values(f, N, name="f"):
@@ -302,6 +301,8 @@ class Grid:
         """
         b = np.asarray(b, dtype=float)
         if Y is None:
+            if X is not None and not sp.issparse(X):
+                return X.T * b[None, :]  # X^T diag(b) without a dense O(N^3) product
             right = self.diag(b)
         else:
             right = self.scale_rows(b, Y)

@@ -43,3 +43,46 @@ def inner(c, a, b):
     if a.shape[0] == 2 * c.N:
         w = np.concatenate([w, w])
     return float(np.sum(a * b * w))
+
+
+def assert_gradient_matches_energy(E, c, directions, rtol=1e-8):
+    """``<nabla_I E, U1>`` against fourth-order central differences of ``E(U + t U1)``."""
+    grad = E.gradient(c)
+    for U1 in directions:
+        d = 1e-6 * np.linalg.norm(c.U) / np.linalg.norm(U1)
+        f = lambda t: E.energy(c.with_U(c.U + t * U1))
+        num = (-f(2 * d) + 8 * f(d) - 8 * f(-d) + f(-2 * d)) / (12 * d)
+        ana = inner(c, grad, U1)
+        scale = np.sqrt(inner(c, grad, grad) * inner(c, U1, U1))
+        assert abs(num - ana) <= rtol * scale, (num, ana)
+
+
+def assert_hessian_matches_energy(E, c, directions, rtol=2e-6, column_rtol=1e-7):
+    """The Hessian against the energy and the gradient it differentiates.
+
+    ``<H U1, U1>`` against fourth-order second differences of ``E(U + t U1)``; the whole
+    column ``W H U1`` (``W = diag(dsigma, dsigma)``) against central differences of the
+    Euclidean gradient ``W nabla_I E``; ``W H`` symmetric.
+    """
+    from qsa.linalg import to_dense
+
+    Hd = to_dense(E.hessian(c))
+    W = np.concatenate([c.dsigma, c.dsigma])
+    for U1 in directions:
+        d = 1e-4 * np.linalg.norm(c.U) / np.linalg.norm(U1)
+        f = lambda t: E.energy(c.with_U(c.U + t * U1))
+        num = (-f(2 * d) + 16 * f(d) - 30 * f(0) + 16 * f(-d) - f(-2 * d)) / (12 * d**2)
+        ana = inner(c, Hd @ U1, U1)
+        bound = max(abs(ana), np.abs(Hd).max() * inner(c, U1, U1))
+        assert abs(num - ana) <= rtol * bound, (num, ana)
+        d = 1e-6 * np.linalg.norm(c.U) / np.linalg.norm(U1)
+
+        def grad_e(t):
+            ct = c.with_U(c.U + t * U1)
+            return E.gradient(ct) * np.concatenate([ct.dsigma, ct.dsigma])
+
+        col = (grad_e(d) - grad_e(-d)) / (2 * d)
+        ref = W * (Hd @ U1)
+        assert np.abs(col - ref).max() <= column_rtol * np.abs(ref).max()
+    A = W[:, None] * Hd
+    assert np.abs(A - A.T).max() <= 1e-12 * np.abs(A).max()

@@ -1,14 +1,21 @@
-"""Energies of closed curves: protocol, local first-order energies, faceting, Canham-Helfrich.
+"""Energies of closed curves: protocol, local first- and second-order energies, the models.
 
 Each energy provides ``energy``, ``gradient`` (nabla_I E in <f,h> = int f h dsigma),
 ``normal_velocity`` (outward V^n) and ``hessian`` (nabla_I^2 E); energies add with ``+``.
+On the closed manifold, ``normal_velocity``, ``multipliers`` (Lambda of
+``nabla_I E = Lambda . Psi``) and ``residual_scale`` are functions of the energy
+(:mod:`qsa.energies.constrained`); the double wells are in :mod:`qsa.energies.wells`.
 """
 
 from qsa.energies.adhesion import Adhesion, AdhesionKernel
 from qsa.energies.base import Energy, EnergySum, Perimeter
-from qsa.energies.faceting import DoubleWell, Faceting, Well
+from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
+from qsa.energies.faceting import Faceting
+from qsa.energies.functionalized import FunctionalizedCurvature
 from qsa.energies.helfrich import CanhamHelfrich
 from qsa.energies.local import Density, FirstOrderEnergy, LocalEnergy
+from qsa.energies.second_order import SecondOrderDensity, SecondOrderEnergy
+from qsa.energies.wells import DoubleWell, QuarticWell, Well, is_quartic, resolve_well
 
 __all__ = [
     "Adhesion",
@@ -17,10 +24,19 @@ __all__ = [
     "EnergySum",
     "Perimeter",
     "DoubleWell",
+    "QuarticWell",
     "Well",
+    "is_quartic",
+    "resolve_well",
     "Faceting",
+    "FunctionalizedCurvature",
     "CanhamHelfrich",
     "Density",
     "FirstOrderEnergy",
     "LocalEnergy",
+    "SecondOrderDensity",
+    "SecondOrderEnergy",
+    "multipliers",
+    "normal_velocity",
+    "residual_scale",
 ]

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -67,10 +67,6 @@ __all__ = [
     "adhesion_field_jacobians",
     "Adhesion",
 ]
-
-
-def _positive(value, name):
-    return real_number(value, name, positive=True)
 
 
 @dataclass(frozen=True)
@@ -106,9 +102,9 @@ class AdhesionKernel:
     a: float
 
     def __post_init__(self):
-        object.__setattr__(self, "A0", _positive(self.A0, "A0"))
-        object.__setattr__(self, "l_star", _positive(self.l_star, "l_star"))
-        object.__setattr__(self, "a", _positive(self.a, "a"))
+        object.__setattr__(self, "A0", real_number(self.A0, "A0", positive=True))
+        object.__setattr__(self, "l_star", real_number(self.l_star, "l_star", positive=True))
+        object.__setattr__(self, "a", real_number(self.a, "a", positive=True))
 
     # ------------------------------------------------------------ the kernel
     def A(self, l):
@@ -317,7 +313,7 @@ def pair_list(x, y, cutoff):
     ([0, 1, 2], [1, 2, 3])
     """
     x, y = _check_positions(x, y)
-    cutoff = _positive(cutoff, "cutoff")
+    cutoff = real_number(cutoff, "cutoff", positive=True)
     if x.size > 1:
         diameter = np.hypot(np.ptp(x), np.ptp(y))
         if diameter < cutoff:
@@ -733,6 +729,7 @@ def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"
 
 
 # --------------------------------------------------------- Curve-level energy
+@dataclass(frozen=True)
 class Adhesion(Energy):
     """Two-point adhesion-repulsion energy of a :class:`~qsa.curve.Curve` (e:AdhE, e:LJ).
 
@@ -768,12 +765,19 @@ class Adhesion(Energy):
     True
     """
 
-    def __init__(self, A0, l_star, a=1.0, method="neighbours"):
-        if method not in ("neighbours", "dense"):
-            raise ValueError(f"method must be 'neighbours' or 'dense', got {method!r}")
-        self.kernel = AdhesionKernel(A0, l_star, a)
-        self.A0, self.l_star, self.a = self.kernel.A0, self.kernel.l_star, self.kernel.a
-        self.method = method
+    A0: float
+    l_star: float
+    a: float = 1.0
+    method: str = "neighbours"
+    kernel: AdhesionKernel = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        if self.method not in ("neighbours", "dense"):
+            raise ValueError(f"method must be 'neighbours' or 'dense', got {self.method!r}")
+        kernel = AdhesionKernel(self.A0, self.l_star, self.a)
+        for name in ("A0", "l_star", "a"):
+            object.__setattr__(self, name, getattr(kernel, name))
+        object.__setattr__(self, "kernel", kernel)
 
     def __repr__(self):
         return f"Adhesion(A0={self.A0}, l_star={self.l_star}, a={self.a})"

@@ -1,20 +1,23 @@
 """Canham-Helfrich bending energy ``int eps/2 kappa^2 dsigma`` (e:CHA-Energy, curvature part).
 
 With ``Perimeter(beta, L_star)`` its normal velocity is
-``V^n = eps (Delta_s kappa + kappa^3/2) - beta (L - L*) kappa`` (MATH.md section 3;
-e:NV-CH with the length penalty in place of the constant surface tension).
+``V^n = eps (Delta_s kappa + kappa^3/2) - beta (L - L*) kappa`` (e:NV-CH with the
+length penalty in place of the constant surface tension).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from qsa.energies.base import _check_param
+from qsa._checks import real_number
 from qsa.energies.local import LocalEnergy, curvature_density
 
 __all__ = ["CanhamHelfrich"]
 
 
+@dataclass(frozen=True)
 class CanhamHelfrich(LocalEnergy):
     """Canham-Helfrich energy ``eps/2 int kappa^2 dsigma``.
 
@@ -25,14 +28,17 @@ class CanhamHelfrich(LocalEnergy):
 
     Examples
     --------
+    >>> import numpy as np
     >>> from qsa import Curve, Fourier
     >>> E = CanhamHelfrich(eps=2.0)
     >>> bool(abs(E.energy(Curve.circle(1.0, Fourier(17))) - 2 * np.pi) < 1e-12)  # eps pi / R
     True
     """
 
-    def __init__(self, eps):
-        self.eps = _check_param(eps, "eps", nonnegative=True)
+    eps: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "eps", real_number(self.eps, "eps", nonnegative=True))
 
     def densities(self):
         """``eps/2 kappa^2`` on nodes."""

@@ -32,8 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from qsa._checks import real_number
 from qsa.curve import Curve
-from qsa.energies.base import Energy, _check_param
+from qsa.energies.base import Energy
 
 __all__ = ["Density", "LocalEnergy", "FirstOrderEnergy"]
 
@@ -75,6 +76,49 @@ class Density:
         if self.placement not in ("edge", "node"):
             raise ValueError(f"placement must be 'edge' or 'node', got {self.placement!r}")
 
+    def energy(self, c: Curve) -> float:
+        """This term's discrete energy ``sum w g f(p, k)`` (module docstring)."""
+        _, _, w, ge, ke, p = _maps(c, self)
+        return float(np.sum(w * ge * _as_array(self.f(p, ke), ke)))
+
+    def euclidean_gradient(self, c: Curve) -> np.ndarray:
+        """This term's ``(dE/dkappa_j, dE/dg_j)``, shape (2N,) (plain partial derivatives)."""
+        Ed, A, w, ge, ke, p = _maps(c, self)
+        f = _as_array(self.f(p, ke), ke)
+        fk = _as_array(self.f_k(p, ke), ke)
+        dk = _apply_T(A, w * ge * fk)
+        if self.uses_p:
+            fp = _as_array(self.f_p(p, ke), ke)
+            dk = dk + Ed.T @ (w * fp)
+            dg = _apply_T(A, w * (f - p * fp))
+        else:
+            dg = _apply_T(A, w * f)
+        return np.concatenate([dk, dg])
+
+    def euclidean_hessian(self, c: Curve):
+        """This term's Euclidean Hessian ``T^T B T`` (module docstring), shape (2N, 2N)."""
+        grid = c.grid
+        S = grid.sandwich  # S(X, b, Y) = X^T diag(b) Y
+        Ed, A, w, ge, ke, p = _maps(c, self)
+        fk = _as_array(self.f_k(p, ke), ke)
+        fkk = _as_array(self.f_kk(p, ke), ke)
+        if self.uses_p:
+            fpp = _as_array(self.f_pp(p, ke), ke)
+            fpk = _as_array(self.f_pk(p, ke), ke)
+            # Phi = g_e f(q/g_e, k_e); its second derivatives in (q, k_e, g_e):
+            Bqq, Bqk, Bqg = w * fpp / ge, w * fpk, -w * p * fpp / ge
+            Bkk, Bkg, Bgg = w * ge * fkk, w * (fk - p * fpk), w * p**2 * fpp / ge
+            kk = S(Ed, Bqq, Ed) + S(Ed, Bqk, A) + S(A, Bqk, Ed) + S(A, Bkk, A)
+            kg = S(Ed, Bqg, A) + S(A, Bkg, A)
+            gg = S(A, Bgg, A)
+        else:
+            kk = S(A, w * ge * fkk, A)
+            kg = S(A, w * fk, A)
+            gg = sp.csr_matrix((c.N, c.N)) if grid.sparse else np.zeros((c.N, c.N))
+        if grid.sparse:
+            return sp.bmat([[kk, kg], [kg.T, gg]], format="csr")
+        return np.block([[kk, kg], [kg.T, gg]])
+
 
 def _maps(c: Curve, term: Density):
     grid = c.grid
@@ -104,7 +148,10 @@ class LocalEnergy(Energy):
 
     Gradients and Hessians are those of the discrete energy, exactly: Euclidean
     (plain partial derivatives) or with respect to ``<f, h> = int f h dsigma`` (rows
-    divided by ``dsigma``).
+    divided by ``dsigma``). A density term is any object with ``energy(c)``,
+    ``euclidean_gradient(c)`` and ``euclidean_hessian(c)``: a first-order
+    :class:`Density`, or a second-order
+    :class:`~qsa.energies.second_order.SecondOrderDensity`.
 
     Examples
     --------
@@ -121,15 +168,14 @@ class LocalEnergy(Energy):
 
         Returns
         -------
-        tuple of Density
+        tuple of Density or SecondOrderDensity
         """
         raise NotImplementedError
 
     def energy(self, c):
         total = 0.0
         for t in self.densities():
-            _, _, w, ge, ke, p = _maps(c, t)
-            total += float(np.sum(w * ge * _as_array(t.f(p, ke), ke)))
+            total += t.energy(c)
         return total
 
     def euclidean_gradient(self, c) -> np.ndarray:
@@ -154,20 +200,10 @@ class LocalEnergy(Energy):
         >>> bool(np.allclose(E.euclidean_gradient(c), E.gradient(c) * w))
         True
         """
-        dk = np.zeros(c.N)
-        dg = np.zeros(c.N)
+        out = np.zeros(2 * c.N)
         for t in self.densities():
-            Ed, A, w, ge, ke, p = _maps(c, t)
-            f = _as_array(t.f(p, ke), ke)
-            fk = _as_array(t.f_k(p, ke), ke)
-            dk += _apply_T(A, w * ge * fk)
-            if t.uses_p:
-                fp = _as_array(t.f_p(p, ke), ke)
-                dk += Ed.T @ (w * fp)
-                dg += _apply_T(A, w * (f - p * fp))
-            else:
-                dg += _apply_T(A, w * f)
-        return np.concatenate([dk, dg])
+            out += t.euclidean_gradient(c)
+        return out
 
     def gradient(self, c):
         """``nabla_I E`` in ``<f, h> = int f h dsigma`` (e:FoE_IG).
@@ -219,31 +255,9 @@ class LocalEnergy(Energy):
         >>> H.shape, bool(abs(H - H.T).max() < 1e-12)
         ((32, 32), True)
         """
-        grid = c.grid
-        S = grid.sandwich  # S(X, b, Y) = X^T diag(b) Y
-        zero = sp.csr_matrix((c.N, c.N)) if grid.sparse else np.zeros((c.N, c.N))
         total = None
         for t in self.densities():
-            Ed, A, w, ge, ke, p = _maps(c, t)
-            fk = _as_array(t.f_k(p, ke), ke)
-            fkk = _as_array(t.f_kk(p, ke), ke)
-            if t.uses_p:
-                fpp = _as_array(t.f_pp(p, ke), ke)
-                fpk = _as_array(t.f_pk(p, ke), ke)
-                # Phi = g_e f(q/g_e, k_e); its second derivatives in (q, k_e, g_e):
-                Bqq, Bqk, Bqg = w * fpp / ge, w * fpk, -w * p * fpp / ge
-                Bkk, Bkg, Bgg = w * ge * fkk, w * (fk - p * fpk), w * p**2 * fpp / ge
-                kk = S(Ed, Bqq, Ed) + S(Ed, Bqk, A) + S(A, Bqk, Ed) + S(A, Bkk, A)
-                kg = S(Ed, Bqg, A) + S(A, Bkg, A)
-                gg = S(A, Bgg, A)
-            else:
-                kk = S(A, w * ge * fkk, A)
-                kg = S(A, w * fk, A)
-                gg = zero
-            if grid.sparse:
-                H = sp.bmat([[kk, kg], [kg.T, gg]], format="csr")
-            else:
-                H = np.block([[kk, kg], [kg.T, gg]])
+            H = t.euclidean_hessian(c)
             total = H if total is None else total + H
         return total
 
@@ -278,6 +292,40 @@ class LocalEnergy(Energy):
             return (sp.diags(winv) @ H).tocsr()
         return H * winv[:, None]
 
+    def gradient_parts(self, c):
+        """``nabla_I`` of each density term separately, in ``<f, h> = int f h dsigma``.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        tuple of ndarray, each shape (2N,)
+            One per :meth:`densities` entry; they add up to :meth:`gradient`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> from qsa.energies import Faceting
+        >>> c = Curve.circle(1.0, Fourier(17))
+        >>> smooth, well = Faceting(0.1, 5.0).gradient_parts(c)  # |p|^2 vanishes on a circle
+        >>> bool(np.allclose(smooth, 0)), bool(np.allclose(well[:17], 6.0))  # W'(1) = 6
+        (True, True)
+        """
+        return tuple(_OneDensity(d).gradient(c) for d in self.densities())
+
+
+class _OneDensity(LocalEnergy):
+    """One density term of a local energy, as an energy of its own."""
+
+    def __init__(self, density: Density):
+        self._density = density
+
+    def densities(self):
+        return (self._density,)
+
 
 class FirstOrderEnergy(LocalEnergy):
     """A user-defined first-order energy ``int F(nabla_s kappa, kappa) dsigma``.
@@ -310,8 +358,9 @@ class FirstOrderEnergy(LocalEnergy):
 
 
 def quadratic_gradient_density(coef: float) -> Density:
-    """``coef/2 |p|^2`` on edges."""
-    coef = _check_param(coef, "coefficient", nonnegative=True)
+    """``coef/2 |p|^2`` on edges (any real ``coef``; negative in
+    :class:`~qsa.energies.FunctionalizedCurvature`)."""
+    coef = real_number(coef, "coefficient")
     zero = lambda p, k: np.zeros_like(p)
     return Density(f=lambda p, k: 0.5 * coef * p**2, f_p=lambda p, k: coef * p, f_k=zero,
                    f_pp=lambda p, k: np.full_like(p, coef), f_pk=zero, f_kk=zero,

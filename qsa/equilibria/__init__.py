@@ -4,12 +4,15 @@
 the N-fold symmetric faceted equilibrium; ``splice(positions, alpha, length=...)`` and
 ``splice_polygon(angles, facets, alpha)`` -> 2N-front quasi-equilibria closed to 1e-12;
 ``circle(R, alpha, ...)``; ``polish(energy, curve)`` (Newton to the exact discrete
-equilibrium) and ``continuation(...)`` (natural / pseudo-arclength, folds). All but
-the front return :class:`Equilibrium`. Conventions and the corrected signs follow
-MATH.md section 5.
+equilibrium). All but the front return :class:`Equilibrium`. Conventions and the
+corrected signs follow MATH.md section 5. Continuation of equilibria is
+:mod:`qsa.continuation` (``qsa.equilibria.continuation``, ``Branch``, ``BranchPoint``
+and ``Fold`` remain here as deprecated aliases).
 """
 
-from qsa.equilibria.continuation import Branch, BranchPoint, Fold, continuation
+import importlib
+import warnings
+
 from qsa.equilibria.heteroclinic import Heteroclinic, heteroclinic
 from qsa.equilibria.newton import PolishResult, multipliers, polish, residual_scale
 from qsa.equilibria.npulse import circle, npulse, resolving_size
@@ -25,11 +28,7 @@ from qsa.equilibria.splice import (
 )
 
 __all__ = [
-    "Branch",
-    "BranchPoint",
-    "Fold",
     "PolishResult",
-    "continuation",
     "multipliers",
     "polish",
     "residual_scale",
@@ -49,3 +48,15 @@ __all__ = [
     "default_cutoff",
     "splice_closure",
 ]
+
+_MOVED = ("Branch", "BranchPoint", "Fold", "continuation")
+
+
+def __getattr__(name):
+    # continuation stands above the equilibria (it needs the spectra too), so the
+    # deprecated names are looked up lazily instead of imported here.
+    if name in _MOVED:
+        warnings.warn(f"qsa.equilibria.{name} is deprecated; use qsa.continuation.{name}",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(importlib.import_module("qsa.continuation"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

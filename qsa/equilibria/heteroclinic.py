@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from qsa.equilibria._wells import _positive, is_quartic, resolve_well
+from qsa._checks import real_number
+from qsa.energies.wells import is_quartic, resolve_well
 
 __all__ = ["Heteroclinic", "heteroclinic"]
 
@@ -320,7 +321,7 @@ def heteroclinic(alpha, well=None, kstar=None) -> Heteroclinic:
     >>> float(psi(0.0)), bool(np.isclose(psi.rates[0], 5 / (np.sqrt(2) * 0.1)))
     (2.5, True)
     """
-    alpha = _positive(alpha, "alpha")
+    alpha = real_number(alpha, "alpha", positive=True)
     well, kstar = resolve_well(well, kstar)
     lam0 = np.sqrt(float(well.d2W(0.0))) / alpha
     lam1 = np.sqrt(float(well.d2W(kstar))) / alpha

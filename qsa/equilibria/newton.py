@@ -57,12 +57,17 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from qsa._checks import real_number
+from qsa._checks import integer, real_number
 from qsa.curve import Curve
 from qsa.discretize import FiniteDifference
+from qsa.energies import Energy
+from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
 from qsa.equilibria.result import Equilibrium
+from qsa.geometry import laplace_s
 from qsa.linalg import SparsePlusLowRank
 
+# multipliers, normal_velocity and residual_scale are properties of the energy on the
+# closed manifold (qsa.energies.constrained); they are re-exported here for old imports.
 __all__ = ["polish", "PolishResult", "EquilibriumSystem", "multipliers", "residual_scale",
            "normal_velocity"]
 
@@ -160,176 +165,6 @@ def _blocks(H, N):
         return H[:N, :N], H[N:, :N], col, None
     H = np.asarray(H)
     return H[:N, :N], H[N:, :N], col, None
-
-
-def _as_parts(energy):
-    """Split an energy into single-density parts (for the residual scale)."""
-    from qsa.energies.local import LocalEnergy
-
-    parts = []
-    for t in energy.terms():
-        if isinstance(t, LocalEnergy):
-            for d in t.densities():
-                parts.append(_SingleDensity(d))
-        else:
-            parts.append(t)
-    return parts
-
-
-def _single_density_class():
-    from qsa.energies.local import LocalEnergy
-
-    class _Single(LocalEnergy):
-        def __init__(self, density):
-            self._d = density
-
-        def densities(self):
-            return (self._d,)
-
-    return _Single
-
-
-def _SingleDensity(d):
-    return _single_density_class()(d)
-
-
-def _laplace(c: Curve, f):
-    """``Delta_s f`` applied without forming the matrix (same discretization as
-    :func:`qsa.geometry.laplace_s`: ``-(1/g) E^T ((E f) / g_e)``)."""
-    grid = c.grid
-    E = grid.edge_difference()
-    ge = grid.edge_average() @ c.g
-    return -(E.T @ ((E @ f) / ge)) / c.g
-
-
-def _laplace_matrix(c: Curve):
-    """:func:`qsa.geometry.laplace_s`, with dense diagonal scalings done by broadcasting."""
-    if c.grid.sparse:
-        from qsa.geometry import laplace_s
-
-        return laplace_s(c)
-    E = c.grid.edge_difference()
-    ge = c.grid.edge_average() @ c.g
-    return -((E.T / ge[None, :]) @ E) / c.g[:, None]
-
-
-def normal_velocity(energy, c: Curve) -> np.ndarray:
-    """``V^n`` of ``energy`` at ``c``, shape (N,), equal to ``energy.normal_velocity(c)``.
-
-    Terms that use the generic formula ``V^n = (Delta_s + kappa^2) mu - kappa xi``
-    are evaluated with ``Delta_s`` applied matrix-free (O(N^2) instead of O(N^3)
-    on Fourier grids); other terms call their own ``normal_velocity``.
-
-    Parameters
-    ----------
-    energy : Energy
-    c : Curve
-
-    Returns
-    -------
-    ndarray, shape (N,)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa.equilibria import circle
-    >>> eq = circle(0.8, 0.1, kstar=5.0)
-    >>> V = normal_velocity(eq.energy, eq.curve)
-    >>> bool(np.allclose(V, eq.energy.normal_velocity(eq.curve))), bool(np.abs(V).max() < 1e-8)
-    (True, True)
-    """
-    from qsa.energies.base import Energy, Perimeter
-
-    N = c.N
-    V = np.zeros(N)
-    mu = np.zeros(N)
-    xi = np.zeros(N)
-    generic = False
-    for t in energy.terms():
-        nv = type(t).normal_velocity
-        if nv is Energy.normal_velocity:
-            grad = t.gradient(c)
-            mu += grad[:N]
-            xi += c.g * grad[N:]
-            generic = True
-        elif isinstance(t, Perimeter):
-            V += -t.beta * (c.length() - t.L_star) * c.kappa
-        else:
-            V += t.normal_velocity(c)
-    if generic:
-        V += _laplace(c, mu) + c.kappa**2 * mu - c.kappa * xi
-    return V
-
-
-def residual_scale(energy, curve: Curve) -> float:
-    """Largest single term of ``V^n = Delta_s mu + kappa^2 mu - kappa xi``, split by density.
-
-    For ``Faceting + Perimeter`` the terms are ``alpha^2 Delta_s^2 kappa``,
-    ``Delta_s W'(kappa)``, ``kappa^2 mu`` and ``kappa g d_g E`` (as for
-    :func:`qsa.equilibria.npulse.faceting_residual`). ``max|V^n| / residual_scale``
-    is the relative residual.
-
-    Parameters
-    ----------
-    energy : Energy
-    curve : Curve
-
-    Returns
-    -------
-    float
-
-    Examples
-    --------
-    >>> from qsa.equilibria import circle
-    >>> eq = circle(1.0, 0.1, kstar=5.0)
-    >>> round(residual_scale(eq.energy, eq.curve), 10)  # kappa^2 mu = W'(1) = 6
-    6.0
-    """
-    N = curve.N
-    scale = 0.0
-    for p in _as_parts(energy):
-        grad = p.gradient(curve)
-        mu, xi = grad[:N], curve.g * grad[N:]
-        for t in (_laplace(curve, mu), curve.kappa**2 * mu, curve.kappa * xi):
-            scale = max(scale, float(np.max(np.abs(t))))
-    return scale if scale > 0 else 1.0
-
-
-def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
-    """Lagrange multipliers ``Lambda`` of ``nabla_I E = Lambda . Psi`` (e:Abs-CP), shape (3,).
-
-    The least-squares projection of ``nabla_I E`` onto ``span Psi`` in ``<.,.>``
-    (MATH.md section 4). For circles ``Psi_1, Psi_2`` are not independent of
-    ``Psi_3`` on a translation-invariant curve only if degenerate; a pseudo-inverse
-    of the Gram matrix is used.
-
-    Parameters
-    ----------
-    energy : Energy
-    curve : Curve
-    gradient : ndarray, shape (2N,), optional
-        ``nabla_I E`` in ``<f, h> = int f h dsigma`` if already computed.
-
-    Returns
-    -------
-    ndarray, shape (3,)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa.equilibria import circle
-    >>> eq = circle(1.0, 0.1, kstar=5.0)
-    >>> (np.round(multipliers(eq.energy, eq.curve), 8) + 0.0).tolist()  # (0, 0, W'(1/R))
-    [0.0, 0.0, 6.0]
-    """
-    from qsa.geometry import constraint_gradients
-
-    Psi = constraint_gradients(curve)
-    grad = energy.gradient(curve) if gradient is None else gradient
-    w = np.concatenate([curve.dsigma, curve.dsigma])
-    G = (Psi * w) @ Psi.T
-    b = (Psi * w) @ grad
-    return np.linalg.lstsq(G, b, rcond=1e-12)[0]
 
 
 def _equal_arclength(curve: Curve) -> Curve:
@@ -517,7 +352,7 @@ class EquilibriumSystem:
         mu, xi = grad[:N], L * grad[N:]
         H = energy.hessian(c)
         Hkk, Hgk, Hcol, lowH = _blocks(H, N)
-        lap = _laplace_matrix(c)
+        lap = laplace_s(c)
         Gm = lap + grid.diag(k**2)  # = -G
         diag = grid.diag
         A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
@@ -653,22 +488,10 @@ def _at_floor(system, x, F, scale, tol, floor):
 
 
 def _check_curve(energy, curve):
-    from qsa.energies.base import Energy
-
     if not isinstance(curve, Curve):
         raise ValueError(f"curve must be a qsa Curve, got {type(curve).__name__}")
     if not isinstance(energy, Energy):
         raise ValueError(f"energy must be a qsa Energy, got {type(energy).__name__}")
-
-
-def _check_positive(value, name):
-    return real_number(value, name, positive=True)
-
-
-def _check_maxiter(maxiter):
-    if isinstance(maxiter, bool) or not isinstance(maxiter, (int, np.integer)) or maxiter < 0:
-        raise ValueError(f"maxiter must be a non-negative integer, got {maxiter!r}")
-    return int(maxiter)
 
 
 def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True):
@@ -816,8 +639,8 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
     (True, True)
     """
     _check_curve(energy, curve)
-    tol = _check_positive(tol, "tol")
-    maxiter = _check_maxiter(maxiter)
+    tol = real_number(tol, "tol", positive=True)
+    maxiter = integer(maxiter, "maxiter", minimum=0)
     guess = _equal_arclength(curve)
     system = EquilibriumSystem(energy, guess)
     x, status, history, n_iter, floor = newton_solve(system, system.pack(guess), tol, maxiter,

@@ -42,23 +42,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from qsa._checks import integer, real_number
 from qsa.discretize import Fourier, Grid
-from qsa.equilibria._wells import _positive, resolve_well
-from qsa.equilibria.orbit import _finite, orbit_with_turning
+from qsa.energies.wells import resolve_well
+from qsa.equilibria.orbit import orbit_with_turning
 from qsa.equilibria.result import Equilibrium
 
 __all__ = ["npulse", "circle", "resolving_size", "faceting_residual"]
-
-
-def _check_pulses(n_pulses):
-    if isinstance(n_pulses, bool) or not isinstance(n_pulses, (int, np.integer)):
-        raise ValueError(f"n_pulses must be an integer >= 2, got {n_pulses!r}")
-    if n_pulses < 2:
-        raise ValueError(
-            f"n_pulses={n_pulses}: need at least 2 pulses (one pulse turns by 2 pi in a "
-            "single facet and cannot close into an N-fold symmetric curve)"
-        )
-    return int(n_pulses)
 
 
 def resolving_size(kappa_of_s, tol=1e-14, max_size=20001):
@@ -226,10 +216,12 @@ def npulse(n_pulses, alpha, well=None, grid=None, nu1=0.0, beta=5.0, kstar=None)
     from qsa.curve import Curve
     from qsa.energies import Faceting, Perimeter
 
-    n = _check_pulses(n_pulses)
-    alpha = _positive(alpha, "alpha")
-    beta = _positive(beta, "beta")
-    nu1 = _finite(nu1, "nu1")
+    n = integer(n_pulses, "n_pulses", minimum=2, too_small=(
+        "{name}={value}: need at least {minimum} pulses (one pulse turns by 2 pi in a "
+        "single facet and cannot close into an N-fold symmetric curve)"))
+    alpha = real_number(alpha, "alpha", positive=True)
+    beta = real_number(beta, "beta", positive=True)
+    nu1 = real_number(nu1, "nu1")
     well, kstar = resolve_well(well, kstar)
     try:
         orbit = orbit_with_turning(alpha, 2 * np.pi / n, nu1, well, kstar)
@@ -282,9 +274,9 @@ def circle(R, alpha, grid=None, beta=5.0, well=None, kstar=None):
     from qsa.curve import Curve
     from qsa.energies import Faceting, Perimeter
 
-    R = _positive(R, "R")
-    alpha = _positive(alpha, "alpha")
-    beta = _positive(beta, "beta")
+    R = real_number(R, "R", positive=True)
+    alpha = real_number(alpha, "alpha", positive=True)
+    beta = real_number(beta, "beta", positive=True)
     well, kstar = resolve_well(well, kstar)
     grid = Fourier(33) if grid is None else _grid(grid, None)
     k0 = 1.0 / R

@@ -55,7 +55,7 @@ from scipy.optimize import brentq
 from scipy.special import expit
 
 from qsa._checks import real_number
-from qsa.equilibria._wells import _positive, is_quartic, resolve_well
+from qsa.energies.wells import is_quartic, resolve_well
 
 __all__ = ["PeriodicOrbit", "periodic_orbit", "periodic_range"]
 
@@ -452,12 +452,8 @@ def periodic_range(nu1=0.0, well=None, kstar=None):
     (-4.0, 0.0)
     """
     well, kstar = resolve_well(well, kstar)
-    fam = _family(well, kstar, _finite(nu1, "nu1"))
+    fam = _family(well, kstar, real_number(nu1, "nu1"))
     return fam.nu2_c, fam.nu2_sep
-
-
-def _finite(x, name):
-    return real_number(x, name)
 
 
 def periodic_orbit(alpha, nu2, nu1=0.0, well=None, kstar=None) -> PeriodicOrbit:
@@ -490,10 +486,10 @@ def periodic_orbit(alpha, nu2, nu1=0.0, well=None, kstar=None) -> PeriodicOrbit:
     >>> bool(orb.a < 2.5 < orb.b), round(orb.turning / orb.period, 12)  # mean = kstar/2
     (True, 2.5)
     """
-    alpha = _positive(alpha, "alpha")
+    alpha = real_number(alpha, "alpha", positive=True)
     well, kstar = resolve_well(well, kstar)
-    fam = _family(well, kstar, _finite(nu1, "nu1"))
-    nu2 = _finite(nu2, "nu2")
+    fam = _family(well, kstar, real_number(nu1, "nu1"))
+    nu2 = real_number(nu2, "nu2")
     if not fam.nu2_c < nu2 < fam.nu2_sep:
         raise ValueError(
             f"nu2={nu2!r} is outside the periodic range ({fam.nu2_c!r}, {fam.nu2_sep!r}) "
@@ -517,9 +513,9 @@ def orbit_with_turning(alpha, turning, nu1=0.0, well=None, kstar=None):
         When no orbit of the family turns by ``turning``; the message gives the
         range of turnings found and, for ``nu1 = 0``, the existence condition.
     """
-    alpha = _positive(alpha, "alpha")
+    alpha = real_number(alpha, "alpha", positive=True)
     well, kstar = resolve_well(well, kstar)
-    fam = _family(well, kstar, _finite(nu1, "nu1"))
+    fam = _family(well, kstar, real_number(nu1, "nu1"))
     target = float(turning)
 
     if fam.closed:

@@ -36,8 +36,9 @@ from dataclasses import replace
 import numpy as np
 from scipy.special import expit
 
+from qsa._checks import finite_array, real_number
 from qsa.discretize import Fourier
-from qsa.equilibria._wells import _positive, is_quartic, resolve_well
+from qsa.energies.wells import is_quartic, resolve_well
 from qsa.equilibria.heteroclinic import heteroclinic
 from qsa.equilibria.result import Equilibrium
 
@@ -268,11 +269,9 @@ def _closure_and_jacobian(prof, fine, want_jac=True):
 
 
 def _check_positions(positions, L, cutoff, front):
-    p = np.asarray(positions, dtype=float)
+    p = finite_array(positions, "positions")
     if p.ndim != 1 or p.size < 4 or p.size % 2:
         raise ValueError(f"positions must be 2N >= 4 front positions, got shape {p.shape}")
-    if not np.all(np.isfinite(p)):
-        raise ValueError("positions contain NaN or inf")
     if np.any(np.diff(p) <= 0) or p[-1] - p[0] >= L:
         raise ValueError("positions must increase strictly and span less than the length L")
     a_max = 0.5 * np.max(p[1::2] - p[0::2])
@@ -387,7 +386,7 @@ def close_positions(positions, front, length, cutoff, tol=1e-12, max_iter=30):
     >>> bool(history[-1] < 1e-12), q.shape, J.shape
     (True, (8,), (3, 8))
     """
-    L = _positive(length, "length")
+    L = real_number(length, "length", positive=True)
     p, cut = _check_positions(positions, L, cutoff, front)
     fine = _fine_grid(front, L)
     C, J = _closure_and_jacobian(SpliceProfile(front, p, L, cut), fine)
@@ -462,11 +461,11 @@ def splice(positions, alpha, well=None, grid=None, length=None, kstar=None, beta
     from qsa.energies import Faceting, Perimeter
     from qsa.equilibria.npulse import _grid, faceting_residual, resolving_size
 
-    alpha = _positive(alpha, "alpha")
-    beta = _positive(beta, "beta")
+    alpha = real_number(alpha, "alpha", positive=True)
+    beta = real_number(beta, "beta", positive=True)
     if length is None:
         raise ValueError("length (the total arc length L) is required")
-    L = _positive(length, "length")
+    L = real_number(length, "length", positive=True)
     well, kstar = resolve_well(well, kstar)
     front = heteroclinic(alpha, well, kstar)
     p, cut = _check_positions(positions, L, cutoff, front)
@@ -537,12 +536,10 @@ def polygon_positions(angles, facets, kstar):
     >>> np.round(np.diff(p), 10).tolist()  # arc, facet, arc, facet, arc
     [0.4188790205, 1.0, 0.4188790205, 1.0, 0.4188790205]
     """
-    ang = np.asarray(angles, dtype=float)
-    fac = np.asarray(facets, dtype=float)
+    ang = finite_array(angles, "angles")
+    fac = finite_array(facets, "facets")
     if ang.ndim != 1 or ang.size < 2 or fac.shape != ang.shape:
         raise ValueError("angles and facets must be 1-d arrays of the same length N >= 2")
-    if not (np.all(np.isfinite(ang)) and np.all(np.isfinite(fac))):
-        raise ValueError("angles and facets must be finite")
     if np.any(ang <= 0):
         raise ValueError("angles must be positive (corners turn towards kstar > 0)")
     if abs(ang.sum() - 2 * np.pi) > 1e-9:
@@ -612,7 +609,7 @@ def splice_polygon(angles, facets, alpha, well=None, grid=None, kstar=None, tol=
     (True, True, 0.418879)
     """
     well, kstar = resolve_well(well, kstar)
-    alpha = _positive(alpha, "alpha")
+    alpha = real_number(alpha, "alpha", positive=True)
     positions, _ = polygon_positions(angles, facets, kstar)
     ang = np.asarray(angles, dtype=float)
     arcs = ang / kstar

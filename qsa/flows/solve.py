@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from qsa._checks import real_number
+from qsa._checks import integer, real_number
 from qsa._version import __version__
 from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
 from qsa.io import load_npz, save_npz
@@ -115,10 +115,6 @@ class FlowResult:
 
 
 # --------------------------------------------------------------- input checks
-def _positive_float(value, name, allow_inf=False):
-    return real_number(value, name, positive=True, allow_inf=allow_inf)
-
-
 def prepare_initial(initial, N=None):
     """Closed samples or a ``Curve`` -> N nodes with equal chords (the first sample kept).
 
@@ -157,9 +153,8 @@ def prepare_initial(initial, N=None):
                          f"{crossings[0, 0]} and {crossings[0, 1]} cross)")
     if N is None:
         N = x.size
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 4:
-        raise ValueError(f"N must be an integer >= 4, got {N!r}")
-    X, Y, _ = resample_closed(x, y, int(N), method="chord")
+    N = integer(N, "N", minimum=4, too_small="{name} must be an integer >= {minimum}, got {value}")
+    X, Y, _ = resample_closed(x, y, N, method="chord")
     return X, Y
 
 
@@ -243,19 +238,19 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
     >>> res.success, bool(res.energy[-1] < res.energy[0])
     (True, True)
     """
-    t_final = _positive_float(t_final, "t_final")
-    tol = _positive_float(tol, "tol")
+    t_final = real_number(t_final, "t_final", positive=True)
+    tol = real_number(tol, "tol", positive=True)
     if method not in METHODS:
         raise ValueError(f"method must be one of {tuple(METHODS)}, got {method!r}")
     if linear_solver not in LINEAR_SOLVERS:
         raise ValueError(f"linear_solver must be one of {LINEAR_SOLVERS}, got {linear_solver!r}")
-    first_step = _positive_float(first_step, "first_step")
-    min_step = 1e-12 * t_final if min_step is None else _positive_float(min_step, "min_step")
-    max_step = t_final if max_step is None else _positive_float(max_step, "max_step")
-    newton_tol = 1e-2 * tol if newton_tol is None else _positive_float(newton_tol, "newton_tol")
-    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) \
-            or max_steps < 1:
-        raise ValueError(f"max_steps must be a positive integer, got {max_steps!r}")
+    first_step = real_number(first_step, "first_step", positive=True)
+    min_step = (1e-12 * t_final if min_step is None
+                else real_number(min_step, "min_step", positive=True))
+    max_step = t_final if max_step is None else real_number(max_step, "max_step", positive=True)
+    newton_tol = (1e-2 * tol if newton_tol is None
+                  else real_number(newton_tol, "newton_tol", positive=True))
+    max_steps = integer(max_steps, "max_steps", minimum=1)
     checkpoint_interval = float(checkpoint_interval)
     if callback is not None and not callable(callback):
         raise ValueError("callback must be callable")

@@ -28,7 +28,7 @@ import numpy as np
 
 from qsa.curve import Curve
 from qsa.energies.base import Energy, add_matrices
-from qsa.equilibria.newton import multipliers, normal_velocity, residual_scale
+from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
 from qsa.geometry import constraint_gradients, constraint_hessians
 
 __all__ = ["hessian", "lagrange_hessian", "LagrangeHessian", "inner_norm", "check_input",

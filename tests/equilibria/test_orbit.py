@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.special import ellipkm1
 
+from qsa.energies.wells import QuarticWell
 from qsa.equilibria import periodic_orbit, periodic_range
-from qsa.equilibria._wells import QuarticWell
 from qsa.equilibria.orbit import _build, _family, orbit_with_turning
 
 orbit_module = importlib.import_module("qsa.equilibria.orbit")

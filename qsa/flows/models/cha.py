@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from qsa._checks import real_number
 from qsa.energies.adhesion import (
     AdhesionKernel,
     adhesion_energy,
@@ -19,7 +20,7 @@ from qsa.energies.adhesion import (
     uniform_weight_fields,
 )
 from qsa.flows.base import FlowModel
-from qsa.flows.models.curve_dae import CurveDAE, _check_xy, _number, equalize_chords
+from qsa.flows.models.curve_dae import CurveDAE, _check_xy, equalize_chords
 
 __all__ = ["CHA", "CHASystem"]
 
@@ -39,7 +40,7 @@ class CHASystem(CurveDAE):
         self.adhesion_method = adhesion_method
         x, y, L = equalize_chords(x, y)
         #: reference length of the penalty ``beta/2 (L - rho L0)^2``
-        self.L0 = L if L0 is None else _number(L0, "L0", positive=True)
+        self.L0 = L if L0 is None else real_number(L0, "L0", positive=True)
         kappa = self.geometric_curvature(x, y, L)
         kss = self._d2(kappa) / L**2
         y0 = np.concatenate([x, y, kappa, kss, np.zeros(self.N), [L]])
@@ -246,12 +247,12 @@ class CHA(FlowModel):
     name: str = field(default="CHA", init=False)
 
     def __post_init__(self):
-        object.__setattr__(self, "eps", _number(self.eps, "eps", nonnegative=True))
-        object.__setattr__(self, "beta", _number(self.beta, "beta", nonnegative=True))
-        object.__setattr__(self, "rho", _number(self.rho, "rho", positive=True))
-        object.__setattr__(self, "A0", _number(self.A0, "A0", nonnegative=True))
-        object.__setattr__(self, "l_star", _number(self.l_star, "l_star", positive=True))
-        object.__setattr__(self, "a", _number(self.a, "a", positive=True))
+        object.__setattr__(self, "eps", real_number(self.eps, "eps", nonnegative=True))
+        object.__setattr__(self, "beta", real_number(self.beta, "beta", nonnegative=True))
+        object.__setattr__(self, "rho", real_number(self.rho, "rho", positive=True))
+        object.__setattr__(self, "A0", real_number(self.A0, "A0", nonnegative=True))
+        object.__setattr__(self, "l_star", real_number(self.l_star, "l_star", positive=True))
+        object.__setattr__(self, "a", real_number(self.a, "a", positive=True))
         if self.adhesion_method not in ("neighbours", "dense"):
             raise ValueError(
                 f"adhesion_method must be 'neighbours' or 'dense', got {self.adhesion_method!r}"

@@ -11,7 +11,6 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from qsa._checks import real_number
 from qsa.curve import self_intersections
 from qsa.flows.base import DAESystem
 
@@ -19,10 +18,6 @@ __all__ = ["CurveDAE", "equalize_chords", "self_intersections"]
 
 
 # ----------------------------------------------------------------- helpers
-def _number(value, name, *, positive=False, nonnegative=False):
-    return real_number(value, name, positive=positive, nonnegative=nonnegative)
-
-
 def _check_xy(x, y, min_nodes):
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)

@@ -9,19 +9,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from qsa.energies import DoubleWell
+from qsa._checks import real_number
+from qsa.energies.wells import resolve_well
 from qsa.flows.base import FlowModel
-from qsa.flows.models.curve_dae import CurveDAE, _check_xy, _number, equalize_chords
-
-
-def _as_well(well, kstar):
-    """``DoubleWell(kstar)`` by default; a user well must have callables W, dW, d2W."""
-    if well is None:
-        return DoubleWell(kstar)
-    for name in ("W", "dW", "d2W"):
-        if not callable(getattr(well, name, None)):
-            raise ValueError(f"well must provide callables W, dW and d2W; {name} is missing")
-    return well
+from qsa.flows.models.curve_dae import CurveDAE, _check_xy, equalize_chords
 
 __all__ = ["FacetingFlow", "FacetingSystem"]
 
@@ -34,7 +25,7 @@ class FacetingSystem(CurveDAE):
     def __init__(self, model, x, y):
         super().__init__(x, y)
         self.model = model
-        self.well = _as_well(model.well, model.kstar)
+        self.well, _ = resolve_well(model.well, model.kstar, equal_depth=False)
         x, y, L = equalize_chords(x, y)
         kappa = self.geometric_curvature(x, y, L)
         mu = -(model.alpha**2) * self._d2(kappa) / L**2 + self.well.dW(kappa)
@@ -170,11 +161,11 @@ class FacetingFlow(FlowModel):
     name: str = field(default="FacetingFlow", init=False)
 
     def __post_init__(self):
-        object.__setattr__(self, "alpha", _number(self.alpha, "alpha", positive=True))
-        object.__setattr__(self, "kstar", _number(self.kstar, "kstar", positive=True))
-        object.__setattr__(self, "beta", _number(self.beta, "beta", nonnegative=True))
-        object.__setattr__(self, "L_star", _number(self.L_star, "L_star", positive=True))
-        _as_well(self.well, self.kstar)  # raises ValueError for an incomplete well
+        object.__setattr__(self, "alpha", real_number(self.alpha, "alpha", positive=True))
+        object.__setattr__(self, "kstar", real_number(self.kstar, "kstar", positive=True))
+        object.__setattr__(self, "beta", real_number(self.beta, "beta", nonnegative=True))
+        object.__setattr__(self, "L_star", real_number(self.L_star, "L_star", positive=True))
+        resolve_well(self.well, self.kstar, equal_depth=False)  # ValueError: incomplete well
 
     def check_resolution(self, x, y):
         """Raise ``ValueError`` for NaN, too few nodes or a clockwise curve."""

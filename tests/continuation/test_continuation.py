@@ -5,9 +5,9 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 from qsa import FiniteDifference, Fourier
+from qsa.continuation import Branch, continuation
 from qsa.energies import Faceting, Perimeter
 from qsa.equilibria import circle, npulse
-from qsa.equilibria.continuation import Branch, continuation
 
 K, BETA, ALPHA = 5.0, 5.0, 0.1
 

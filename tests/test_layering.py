@@ -1,0 +1,73 @@
+"""The pipeline's layers import one way (lower layers never import upper ones).
+
+Every ``import`` statement of every module of ``qsa`` is read from its source
+(module level and inside functions alike) and mapped to the top-level part of
+``qsa`` it names.
+"""
+
+import ast
+import functools
+from pathlib import Path
+
+import pytest
+
+import qsa
+
+ROOT = Path(qsa.__file__).parent
+
+#: part -> parts it must never import
+FORBIDDEN = {
+    "energies": {"equilibria", "spectra", "flows", "continuation", "reduction", "plotting"},
+    "equilibria": {"spectra", "flows", "continuation", "plotting"},
+    "spectra": {"equilibria", "flows", "continuation", "plotting"},
+    "flows": {"equilibria", "spectra", "continuation", "plotting"},
+    "continuation": {"flows", "plotting"},
+    "geometry": {"energies", "equilibria", "spectra", "flows", "continuation"},
+    "curve": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
+    "discretize": {"curve", "geometry", "energies", "equilibria", "spectra", "flows"},
+}
+
+#: modules kept only as deprecated aliases of a moved home
+ALIASES = {"equilibria/continuation.py"}
+
+
+def _part(path: Path) -> str:
+    rel = path.relative_to(ROOT)
+    return rel.parts[0].removesuffix(".py")
+
+
+def _imported_parts(path: Path) -> set:
+    tree = ast.parse(path.read_text(), str(path))
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module)
+            if node.module == "qsa":  # from qsa import spectra
+                names.update(f"qsa.{a.name}" for a in node.names)
+    return {n.split(".")[1] for n in names if n.startswith("qsa.")}
+
+
+@functools.lru_cache(maxsize=1)
+def import_table() -> dict:
+    """``{part: set of other parts it imports}`` over the package's modules."""
+    table = {}
+    for path in sorted(ROOT.rglob("*.py")):
+        if str(path.relative_to(ROOT)) in ALIASES:
+            continue
+        part = _part(path)
+        table.setdefault(part, set()).update(_imported_parts(path) - {part})
+    return table
+
+
+@pytest.mark.parametrize("part", sorted(FORBIDDEN))
+def test_lower_layers_do_not_import_upper_ones(part):
+    table = import_table()
+    bad = table.get(part, set()) & FORBIDDEN[part]
+    assert not bad, f"qsa.{part} imports {sorted(bad)}"
+
+
+def test_the_parser_sees_imports():
+    # a check of the check: the continuation uses both layers below it
+    assert {"equilibria", "spectra", "energies"} <= import_table()["continuation"]
