@@ -184,15 +184,17 @@ class Factorization:
         Number of stored entries of the factors of ``C`` (``n^2`` for dense).
     """
 
-    def __init__(self, C, B1=None, B2=None, D=None):
+    def __init__(self, C, B1=None, B2=None, D=None, _core=None):
         n = C.shape[0]
-        if sp.issparse(C):
+        if _core is not None:
+            self._solve, self.nnz = _core
+        elif sp.issparse(C):
             try:
-                self._lu = spla.splu(sp.csc_matrix(C), permc_spec="COLAMD")
+                lu = spla.splu(sp.csc_matrix(C), permc_spec="COLAMD")
             except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
                 raise np.linalg.LinAlgError(f"singular matrix: {exc}") from None
-            self._solve = self._lu.solve
-            self.nnz = int(self._lu.L.nnz + self._lu.U.nnz)
+            self._solve = lu.solve
+            self.nnz = int(lu.L.nnz + lu.U.nnz)
         else:
             C = np.asarray(C, dtype=float)
             lu, piv = sla.lu_factor(C, check_finite=True)
@@ -210,6 +212,21 @@ class Factorization:
             schur = np.asarray(D, dtype=float) - self._B2 @ self._Z
             self._schur = sla.lu_factor(schur)
 
+    def with_border(self, B1=None, B2=None, D=None) -> Factorization:
+        """The same core ``C`` (not factored again) with another border.
+
+        Parameters
+        ----------
+        B1 : ndarray, shape (n, p), optional
+        B2 : ndarray, shape (p, n), optional
+        D : ndarray, shape (p, p), optional
+
+        Returns
+        -------
+        Factorization
+        """
+        return Factorization(_Shape(self._n), B1, B2, D, _core=(self._solve, self.nnz))
+
     def solve(self, b):
         """``x`` with ``[[C, B1], [B2, D]] x = b``, shape (n + p,) (or (n,) without border)."""
         b = np.asarray(b, dtype=float)
@@ -220,6 +237,13 @@ class Factorization:
         y0 = self._solve(f)
         y = sla.lu_solve(self._schur, g - self._B2 @ y0)
         return np.concatenate([y0 - self._Z @ y, y])
+
+
+class _Shape:
+    """Stand-in for a core that is already factored (only its shape is read)."""
+
+    def __init__(self, n):
+        self.shape = (n, n)
 
 
 def factorize(C, B1=None, B2=None, D=None) -> Factorization:

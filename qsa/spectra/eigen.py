@@ -143,10 +143,14 @@ def solve(energy, curve: Curve, gauge, k=None, sigma=None, rtol=1e-5, lagrange=N
     w = curve.dsigma
     if gauge == "normal":
         op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
-        basis = rigid_normal_basis(curve) if deflate else np.zeros((0, curve.N))
+        rigid_basis = rigid_normal_basis(curve)
+        basis, rigid = rigid_basis, None
+        if not deflate:
+            basis, rigid = np.zeros((0, curve.N)), op.ritz(rigid_basis)[0]
         if k is None:
-            return dense_normal(op, basis, rtol, vectors=vectors)
-        sol = certified_eigenpairs(op, basis, k=k, sigma=0.0 if sigma is None else sigma)
+            return dense_normal(op, basis, rtol, vectors=vectors, rigid=rigid)
+        sol = certified_eigenpairs(op, basis, k=k, sigma=0.0 if sigma is None else sigma,
+                                   rigid=rigid)
         order = np.argsort(-sol.values, kind="stable")
         return EigenSolution(sol.values[order], sol.vectors[:, order], sol.errors[order],
                              sol.is_kernel[order], sol.method)
@@ -349,7 +353,9 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     factor : float
         Resolution ratio of the check (about 1.5).
     equilibrium_tol : float
-        Warn when ``max|V^n|`` relative to its largest term exceeds this.
+        Warn when ``max|V^n|`` relative to its largest term exceeds this and ``max|V^n|``
+        is above 100 times its round-off floor (:func:`qsa.energies.residual_floor`:
+        on fine grids ``V^n`` cannot be evaluated more accurately).
     rtol : float
         Relative accuracy required of a reported eigenvalue (kernel modes excepted).
     deflate : bool, optional
@@ -387,17 +393,18 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
 
     LH = lagrange_hessian(energy, curve)
     status, notes = 0, []
-    if LH.relative_residual > equilibrium_tol:
+    if not LH.is_equilibrium(equilibrium_tol):
         status = 1
         text = (f"the curve is not an equilibrium: max|V^n| is {LH.relative_residual:.2e} of "
-                f"its largest term, projection residual |grad E - Lambda.Psi| = "
+                f"its largest term ({LH.residual / max(LH.residual_floor, 1e-300):.1e} times "
+                f"its round-off floor), projection residual |grad E - Lambda.Psi| = "
                 f"{LH.projection_residual:.3e} ({LH.relative_projection_residual:.1e} relative); "
                 "the eigenvalues are those of the operator at this curve, not of a "
                 "linearization about an equilibrium")
         warnings.warn(text, NotEquilibriumWarning, stacklevel=2)
         notes.append(text)
     if deflate is None:
-        deflate = status == 0
+        deflate = LH.is_equilibrium(equilibrium_tol)
     op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
     basis = rigid_normal_basis(curve)
 

@@ -369,40 +369,91 @@ class ShiftInvert:
         D[:r, :r] = np.eye(r)
         self._B1, self._B2, self._D = B1, B2, D
         self._lu = factorize(core, B1, B2, D)
-        self.last_correction = 0.0
+        self._free = None
+        self.last_correction = np.zeros(0)
 
     @property
     def shape(self):
         """``(N, N)``: the operator acts on nodal vectors."""
         return (self.op.N, self.op.N)
 
-    def _apply_full(self, x):
-        """The bordered matrix times ``x`` (shape (3N + r + m,))."""
+    def _apply(self, x, p):
+        """The core with the first ``p`` border columns/rows times ``x`` ((n + p,) or (n + p, k))."""
         n = self._core.shape[0]
-        y = self._core @ x[:n] + self._B1 @ x[n:]
-        z = self._B2 @ x[:n] + self._D @ x[n:]
-        return np.concatenate([y, z])
+        B1, B2, D = self._B1[:, :p], self._B2[:p], self._D[:p, :p]
+        y = self._core @ x[:n] + B1 @ x[n:]
+        z = B2 @ x[:n] + D @ x[n:]
+        return np.concatenate([y, z], axis=0)
+
+    def _refined(self, lu, p, b, refine, estimate):
+        N = self.op.N
+        b = np.asarray(b, dtype=float)
+        rhs = np.zeros((self._core.shape[0] + p,) + b.shape[1:])
+        rhs[:N] = b
+        x = lu.solve(rhs)
+        for _ in range(refine):
+            x = x + lu.solve(rhs - self._apply(x, p))
+        if estimate:
+            dx = lu.solve(rhs - self._apply(x, p))
+            w = self.op.w if b.ndim == 1 else self.op.w[:, None]
+            self.last_correction = np.sqrt(np.sum(w * dx[:N] ** 2, axis=0))
+        return x[:N]
 
     def solve(self, b, refine=1, estimate=False):
-        """``phi`` with ``(W J - sigma W) phi + W R^T mu = b``, ``R W phi = 0``; shape (N,).
+        """``phi`` with ``(W J - sigma W) phi + W R^T mu = b``, ``R W phi = 0``.
 
-        ``refine`` steps of iterative refinement follow the block-elimination solve
-        (the residual of the whole bordered system, in working precision; one step makes
-        block elimination accurate even when the core is nearly singular). With
-        ``estimate=True`` one further correction is computed but not applied; its
-        ``<.,.>`` norm, an estimate of the forward error of the returned ``phi``, is
-        stored in :attr:`last_correction`.
+        ``b`` has shape (N,) or (N, k) (columns solved together). ``refine`` steps of
+        iterative refinement follow the block-elimination solve (the residual of the
+        whole bordered system, in working precision; one step makes block elimination
+        accurate even when the core is nearly singular). With ``estimate=True`` one
+        further correction is computed but not applied; its ``<.,.>`` norm (per column),
+        an estimate of the forward error of the returned ``phi``, is stored in
+        :attr:`last_correction`.
         """
-        N = self.op.N
-        rhs = np.zeros(self._lu.shape[0])
-        rhs[:N] = b
-        x = self._lu.solve(rhs)
-        for _ in range(refine):
-            x = x + self._lu.solve(rhs - self._apply_full(x))
-        if estimate:
-            dx = self._lu.solve(rhs - self._apply_full(x))
-            self.last_correction = float(np.sqrt(np.sum(self.op.w * dx[:N] ** 2)))
-        return x[:N]
+        return self._refined(self._lu, self._B1.shape[1], b, refine, estimate)
+
+    def solve_free(self, b, refine=1, estimate=False):
+        """As :meth:`solve`, with the same factors but without the deflation."""
+        r = self.op.rank
+        if self._free is None:
+            self._free = self._lu.with_border(self._B1[:, :r], self._B2[:r], self._D[:r, :r])
+        return self._refined(self._free, r, b, refine, estimate)
+
+    def kernel_ritz(self, R):
+        """Ritz values of ``J`` on ``span R`` from the inverse, with error estimates.
+
+        Rayleigh-Ritz for ``K = (W J - sigma W)^{-1} W`` (without the deflation) on the
+        span of the ``<.,.>``-orthonormal rows ``R``: ``K`` smooths, so the rounding noise
+        of the rigid fields (computed from the node positions) does not enter, as it
+        does in the direct quadratic form (:meth:`FactoredNormalOperator.ritz`), whose
+        error grows like ``eps^2 |J|``.
+
+        Parameters
+        ----------
+        R : ndarray, shape (m, N)
+
+        Returns
+        -------
+        values : ndarray, shape (m,)
+        vectors : ndarray, shape (N, m)
+        errors : ndarray, shape (m,)
+        """
+        w = self.op.w
+        m = R.shape[0]
+        if m == 0:
+            return np.zeros(0), np.zeros((self.op.N, 0)), np.zeros(0)
+        X = self.solve_free(w[:, None] * R.T)
+        A = R @ (w[:, None] * X)
+        nu, Q = np.linalg.eigh(0.5 * (A + A.T))
+        vecs = R.T @ Q
+        KX = self.solve_free(w[:, None] * vecs, estimate=True)
+        vals = self.sigma + 1.0 / nu
+        res = KX - nu[None, :] * vecs
+        rn = np.sqrt(np.sum(w[:, None] * res**2, axis=0)) + self.last_correction
+        den = np.abs(nu) * (np.abs(nu) - rn)
+        err = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
+        err = err + self.op.rounding_error(vecs) + _EPS * np.abs(vals)
+        return vals, vecs, err
 
     def operator(self):
         """``K = (W J - sigma W)^{-1} W`` as a ``scipy.sparse.linalg.LinearOperator``."""
@@ -424,13 +475,10 @@ class ShiftInvert:
         """
         w = self.op.w
         lam = np.asarray(eigenvalues, dtype=float)
-        res = np.empty(lam.size)
-        for i in range(lam.size):
-            phi = vectors[:, i]
-            nu = 1.0 / (lam[i] - self.sigma)
-            r = self.solve(w * phi, estimate=True) - nu * phi
-            rn = float(np.sqrt(np.sum(w * r * r))) + self.last_correction
-            den = abs(nu) * (abs(nu) - rn)
-            res[i] = rn / den if den > 0 else np.inf
+        nu = 1.0 / (lam - self.sigma)
+        r = self.solve(w[:, None] * vectors, estimate=True) - nu[None, :] * vectors
+        rn = np.sqrt(np.sum(w[:, None] * r * r, axis=0)) + self.last_correction
+        den = np.abs(nu) * (np.abs(nu) - rn)
+        res = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
         rnd = self.op.rounding_error(vectors)
         return EigenErrors(res, rnd, res + rnd + _EPS * np.abs(lam))

@@ -238,8 +238,11 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
     m = basis.shape[0]
     if eigenvalues is None:
         # deflation is exact at an equilibrium only; elsewhere count from J's own spectrum
-        R = basis if LH.relative_residual <= EQUILIBRIUM_TOL else np.zeros((0, curve.N))
-        sol = certified_eigenpairs(op, R, k=min(m + 6, curve.N - 1), sigma=0.0)
+        if LH.is_equilibrium(EQUILIBRIUM_TOL):
+            sol = certified_eigenpairs(op, basis, k=min(m + 6, curve.N - 1), sigma=0.0)
+        else:
+            sol = certified_eigenpairs(op, np.zeros((0, curve.N)), k=min(m + 6, curve.N - 1),
+                                       sigma=0.0, rigid=op.ritz(basis)[0])
         n_kernel, tol = kernel_size(sol.values, sol.errors, sol.is_kernel)
         if kernel_tol is not None:
             tol = real_number(kernel_tol, "kernel_tol", positive=True)

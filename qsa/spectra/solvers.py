@@ -93,7 +93,7 @@ def _dense_inverse(op, si, R):
     """All eigenpairs of the compressed inverse ``Q^T W (W J - sigma W)^{-1} W Q``."""
     w = op.w
     Q = _complement_basis(op.curve, R)
-    X = np.column_stack([si.solve(w * Q[:, j]) for j in range(Q.shape[1])])
+    X = si.solve(w[:, None] * Q)
     Kc = Q.T @ (w[:, None] * X)
     nu, Y = np.linalg.eigh(0.5 * (Kc + Kc.T))
     keep = nu != 0
@@ -115,7 +115,8 @@ def _arpack(op, si, R, k, seed=0):
     return vals, vecs
 
 
-def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0) -> EigenSolution:
+def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0,
+                         rigid=None) -> EigenSolution:
     """Eigenpairs of ``J`` nearest ``sigma`` from the factors, with error estimates.
 
     Parameters
@@ -128,6 +129,9 @@ def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0) -> Ei
         Number of eigenvalues wanted (kernel included): the ``k`` nearest ``sigma``.
         Default: all of them (dense compressed inverse).
     sigma : float
+    rigid : ndarray, optional
+        Estimates of the rigid modes' eigenvalues, kept away from the shift (default:
+        the Ritz values on ``R``; pass them when ``R`` is empty, i.e. no deflation).
 
     Returns
     -------
@@ -136,8 +140,9 @@ def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0) -> Ei
         ARPACK error when a solve fails.
     """
     N, m = op.N, R.shape[0]
-    rvals, rvecs, rerr = op.ritz(R)
-    si = _shift(op, sigma, R, rvals)
+    estimate = op.ritz(R)[0] if rigid is None else np.asarray(rigid, dtype=float)
+    si = _shift(op, sigma, R, np.append(estimate, 0.0))
+    rvals, rvecs, rerr = si.kernel_ritz(R)
     free = N - m
     # a few more than asked: the shift may have moved, and the rigid Ritz values compete
     want = free if k is None else min(int(k) + 2, free - 1)
@@ -199,7 +204,7 @@ def _shift(op, sigma, R, rigid):
         return op.shift_invert(sigma + delta, deflate=R)
 
 
-def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True) -> EigenSolution:
+def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True, rigid=None) -> EigenSolution:
     """Every eigenvalue of ``J``: the formed symmetric matrix, then the factors near 0.
 
     The formed ``S = W^{1/2} J W^{-1/2}`` gives all eigenvalues with absolute error
@@ -230,14 +235,30 @@ def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True) -> EigenSolu
     m = R.shape[0]
     if n_bad:
         k = _window(np.abs(lam), max(n_bad, m) + 2, MAX_CERTIFIED + m)
-        cert = certified_eigenpairs(op, R, k=k, sigma=0.0)
+        cert = certified_eigenpairs(op, R, k=k, sigma=0.0, rigid=rigid)
         drop = np.argsort(np.abs(lam), kind="stable")[: cert.values.size]
         keep = np.ones(lam.size, bool)
         keep[drop] = False
-        values = np.concatenate([lam[keep], cert.values])
-        errors = np.concatenate([err[keep], cert.errors])
+        cvals, cerr = cert.values.copy(), cert.errors.copy()
+        cvecs = None if vecs is None else cert.vectors.copy()
+        # far from 0 the formed matrix may be the more accurate of the two: take, for each
+        # non-kernel value of the window, the dense partner when its error is smaller
+        used = np.zeros(drop.size, bool)
+        for i in np.argsort(cvals):
+            if cert.is_kernel[i]:
+                continue
+            free = np.flatnonzero(~used)
+            j = free[np.argmin(np.abs(lam[drop[free]] - cvals[i]))]
+            used[j] = True
+            d = drop[j]
+            if err[d] < cerr[i] and abs(lam[d] - cvals[i]) <= 3 * (err[d] + cerr[i]):
+                cvals[i], cerr[i] = lam[d], err[d]
+                if cvecs is not None:
+                    cvecs[:, i] = vecs[:, d]
+        values = np.concatenate([lam[keep], cvals])
+        errors = np.concatenate([err[keep], cerr])
         is_kernel = np.concatenate([np.zeros(int(keep.sum()), bool), cert.is_kernel])
-        vecs = None if vecs is None else np.hstack([vecs[:, keep], cert.vectors])
+        vecs = None if vecs is None else np.hstack([vecs[:, keep], cvecs])
         method = "dense + factored"
     else:
         values, errors, is_kernel = lam, err, _nearest_mask(lam, m)
