@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from qsa.flows.dae import CHA, FacetingFlow, equalize_chords
+from qsa.flows.dae import FacetingFlow, equalize_chords
+from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
 
 
@@ -79,7 +81,7 @@ def newton_solve_table(Ns, steps=(1e-4, 1e-3, 1e-2)):
     print("\nCHA l* = 1/2: one Newton-matrix solve, full sparse LU vs LU(J_local) + GMRES")
     print(f"{'N':>6} {'k':>8} {'LU(J) [ms]':>11} {'LU(J_loc)+GMRES [ms]':>21} {'its':>4} "
           f"{'ratio':>6}")
-    model = CHA(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
+    model = CONVERGENCE.model()
     for N in Ns:
         x, y, _ = wobbly(N)
         sys = model.setup(x, y)
@@ -110,14 +112,14 @@ def main(argv=None):
     run("FacetingFlow(alpha=0.1, kstar=5, beta=5, L_star=8)", facet_N,
         lambda N, L: FacetingFlow(alpha=0.1, kstar=5.0, beta=5.0, L_star=8.0), rep, 1.15)
     run("CHA, neighbour list, l* = 2 L/N (fixed neighbours per node)", cha_N,
-        lambda N, L: CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=2 * L / N, a=1.0),
+        lambda N, L: replace(CHAScenario(), l_star=2 * L / N).model(),
         rep, 1.3)
     fixed_N = [1000, 2000, 4000] if args.quick else [1000, 2000, 4000, 8000]
     run("CHA, neighbour list, paper's folding kernel l* = 0.01 (Table T1)", fixed_N,
-        lambda N, L: CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=0.01, a=1.0), rep)
+        lambda N, L: CHAScenario().model(), rep)
     run("CHA, paper's convergence-study kernel l* = 1/2 (dense adhesion block)",
         [100, 200, 400, 800],
-        lambda N, L: CHA(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0), rep)
+        lambda N, L: CONVERGENCE.model(), rep)
     newton_solve_table([100, 400] if args.quick else [100, 200, 400, 800])
 
 

@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from qsa.commands.reproduce_convergence import PARAMS, paper_initial_curve
-from qsa.flows import CHA, FacetingFlow, solve_flow
+from qsa.flows import FacetingFlow, solve_flow
+from qsa.paper import CONVERGENCE, CHAScenario
 
 
 def timed(fn, *args, **kwargs):
@@ -35,10 +36,11 @@ def paper_example(Ns, targets):
           "doubling, physical t = 0.2")
     print(f"{'N':>5} {'steps':>6} {'newton':>7} {'LU':>5} {'cpu [s]':>8} {'wall [s]':>9} "
           f"{'target':>7}")
-    init = paper_initial_curve()
+    sc = CONVERGENCE
+    init = sc.samples()
     for N in Ns:
-        res, cpu, wall = timed(solve_flow, CHA(**PARAMS), init, 0.2, N=N, tol=1e-4,
-                               t_eval=[0.2], progress=False)
+        res, cpu, wall = timed(solve_flow, sc.model(), init, sc.t_final, N=N, tol=sc.tol,
+                               t_eval=[sc.t_final], progress=False)
         target = targets.get(N)
         verdict = "" if target is None else ("ok" if cpu <= target else "MISSED")
         print(f"{N:>5} {res.n_steps:>6} {res.n_newton:>7} {res.n_factorizations:>5} "
@@ -83,15 +85,15 @@ def dense_reference_ratio(Ns, passes):
           "dense LU)")
     print(f"{'N':>5} {'passes':>6} {'qsa cpu/pass':>13} {'dense cpu/pass':>15} {'ratio':>7} "
           f"{'max |dX|':>9}")
-    init = paper_initial_curve()
+    init = CONVERGENCE.samples()
     h = 2e-4
     for N in Ns:
         n = passes.get(N, 3)
         T = n * h
         kw = dict(N=N, tol=1e3, first_step=h, max_step=h, t_eval=[T], progress=False,
                   newton_tol=1e-9)
-        ours, c1, _ = timed(solve_flow, CHA(**PARAMS), init, T, **kw)
-        ref, c2, _ = timed(solve_flow, CHA(**PARAMS), init, T, linear_solver="dense",
+        ours, c1, _ = timed(solve_flow, CONVERGENCE.model(), init, T, **kw)
+        ref, c2, _ = timed(solve_flow, CONVERGENCE.model(), init, T, linear_solver="dense",
                            reuse_factorizations=False, **kw)
         dx = np.max(np.abs(ours.states[-1][: 2 * N] - ref.states[-1][: 2 * N]))
         print(f"{N:>5} {ours.n_steps:>6} {c1 / n:>13.4f} {c2 / n:>15.4f} {c2 / c1:>7.1f} "
@@ -109,8 +111,8 @@ def main(argv=None):
                   target=1.15)
     cha_N = [100, 1000] if args.quick else [100, 300, 1000, 3000, 10000]
     cost_per_step("CHA, neighbour list, l* = 2 L/N (fixed neighbours per node): cost per step",
-                  cha_N, lambda N: CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0,
-                                       l_star=2 * 7.6 / N, a=1.0), 1e-7, target=1.3)
+                  cha_N, lambda N: replace(CHAScenario(), l_star=2 * 7.6 / N).model(), 1e-7,
+                  target=1.3)
     dense_reference_ratio([100, 200] if args.quick else [100, 200, 400, 800],
                           {100: 5, 200: 4, 400: 3, 800: 2})
 

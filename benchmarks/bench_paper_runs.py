@@ -15,8 +15,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 
-from qsa.flows.paper_runs import run_cha, run_facet
-from qsa.flows.scenarios import CHAScenario, FacetScenario
+from qsa.paper import CHAScenario, FacetScenario, run_cha, run_facet
 
 
 def main():
@@ -27,18 +26,19 @@ def main():
     print(f"{'run':14s}{'t_final':>9s}{'N':>6s}{'steps':>7s}{'wall s':>9s}  result")
     with tempfile.TemporaryDirectory() as out:
         for t_final in (2.0,) if args.quick else (2.0, 400.0):
-            s = run_facet(FacetScenario(), f"{out}/facet{t_final:g}", t_final=t_final,
-                          progress=False).summary
-            print(f"{'facet':14s}{t_final:9g}{600:6d}{s['n_steps']:7d}{s['wall_seconds']:9.1f}"
-                  f"  fronts {s['peak_fronts']}->{s['final_fronts']} in {s['n_events']} events,"
-                  f" 3-fold defect {s['final_rotation_defect']:.2g}")
+            sc = FacetScenario()
+            r = run_facet(sc, f"{out}/facet{t_final:g}", t_final=t_final, progress=False)
+            c = r.coarsening
+            print(f"{'facet':14s}{t_final:9g}{sc.N:6d}{r.n_steps:7d}{r.wall_seconds:9.1f}"
+                  f"  fronts {c.peak}->{r.final.fronts} in {len(c.events)} events,"
+                  f" 3-fold defect {r.final.rotation_defect:.2g}")
         if args.cha:
             for rho in (1.2, 1.3, 1.4):
-                s = run_cha(CHAScenario(rho=rho), out, progress=False).summary
-                ratio = s["separation_ratio"]
-                print(f"{'cha rho=' + format(rho, 'g'):14s}{s['t_final']:9g}{s['params']['N']:6d}"
-                      f"{s['n_steps']:7d}{s['wall_seconds']:9.1f}  sheet pairs "
-                      f"{s['n_sheet_pairs']}, separation ratio "
+                r = run_cha(CHAScenario(rho=rho), out, progress=False)
+                ratio = r.separation_ratio
+                print(f"{'cha rho=' + format(rho, 'g'):14s}{r.t_final:9g}{r.N:6d}"
+                      f"{r.n_steps:7d}{r.wall_seconds:9.1f}  sheet pairs "
+                      f"{r.n_sheet_pairs}, separation ratio "
                       f"{'-' if ratio is None else format(ratio, '.3f')}")
 
 

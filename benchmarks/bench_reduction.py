@@ -2,7 +2,7 @@
 
 For each scenario of ``qsa reproduce fronts`` the DAE (``solve_flow``, BDF2, tol 1e-6,
 stopped at the first pair annihilation; run through
-:func:`qsa.reduction.compare.compare_fronts`) at each resolution N, and the four
+:func:`qsa.paper.compare_fronts`) at each resolution N, and the four
 reductions (force correction none / newton, fixed length / variable length with
 beta = 5) stopped at their first collision, with the settings of ``compare_fronts``
 (rtol 1e-4, ``method="auto"``: RK45, or Radau for a stiff perimeter mode), each with both
@@ -26,8 +26,8 @@ import time
 
 import numpy as np
 
-from qsa.reduction.compare import SCENARIOS, compare_fronts, scenario_splice
-from qsa.reduction.ode import FrontODE
+from qsa.paper import SCENARIOS, compare_fronts
+from qsa.reduction import FrontODE
 
 VARIANTS = [(None, False), ("newton", False), (None, True), ("newton", True)]
 
@@ -43,16 +43,17 @@ def backends():
 
 def ode_cpu(scenario, correction=None, variable=False, backend="numpy", repeat=5):
     """Best-of-``repeat`` CPU time of the ODE alone (to its first collision), nfev, ``t_c``."""
-    eq = scenario_splice(scenario)
+    sc = SCENARIOS[scenario]
+    eq = sc.splice()
     p = np.array(eq.params["positions"])
-    ode = FrontODE(0.1, 5.0, eq.params["L"], correction=correction,
-                   beta=5.0 if variable else None, backend=backend)
+    ode = FrontODE(sc.alpha, sc.kstar, eq.params["L"], correction=correction,
+                   beta=sc.beta if variable else None, backend=backend)
     opts = {"rtol": 1e-4, "method": "auto"}
-    ode.integrate(p, SCENARIOS[scenario].t_final, max_collisions=0, **opts)  # warm-up
+    ode.integrate(p, sc.t_final, max_collisions=0, **opts)  # warm-up
     best = np.inf
     for _ in range(repeat):
         t0 = time.process_time()
-        r = ode.integrate(p, SCENARIOS[scenario].t_final, max_collisions=0, **opts)
+        r = ode.integrate(p, sc.t_final, max_collisions=0, **opts)
         best = min(best, time.process_time() - t0)
     tc = r.first_collision.time if r.events else np.nan
     return best, r.nfev, tc
@@ -64,10 +65,9 @@ def main(Ns):
         print(f"{name}: DAE (beta = 5)")
         print(f"  {'N':>5s} {'cpu s':>7s} {'steps':>6s} {'t_c':>9s}")
         for N in Ns:
-            s = compare_fronts(name, N=N).summary
-            dae[N] = (s["time_dae"], s["collision_dae"])
-            print(f"  {N:5d} {s['time_dae']:7.2f} {s['n_steps_dae']:6d} "
-                  f"{s['collision_dae']:9.5f}")
+            c = compare_fronts(name, N=N)
+            dae[N] = (c.time_dae, c.collision_dae)
+            print(f"  {N:5d} {c.time_dae:7.2f} {c.n_steps_dae:6d} {c.collision_dae:9.5f}")
         head = "".join(f" {'x DAE ' + str(N):>11s}" for N in Ns)
         diff = "".join(f" {'%/' + str(N):>7s}" for N in Ns)
         print(f"  {'reduction':22s} {'backend':>7s} {'cpu s':>7s} {'nfev':>5s}{head} "

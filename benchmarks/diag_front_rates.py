@@ -37,7 +37,7 @@ import numpy as np
 
 from qsa import FiniteDifference
 from qsa.flows import FacetingFlow, solve_flow
-from qsa.reduction.compare import SCENARIOS, scenario_splice
+from qsa.paper import SCENARIOS, scenario_splice
 from qsa.reduction.fronts import detect_fronts, track_flow
 from qsa.reduction.ode import FrontODE
 

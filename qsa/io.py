@@ -30,7 +30,7 @@ import zipfile
 
 import numpy as np
 
-__all__ = ["save_npz", "load_npz"]
+__all__ = ["save_npz", "load_npz", "json_default"]
 
 _META = "__meta__"
 
@@ -61,7 +61,7 @@ def save_npz(path, arrays, meta):
         if a.dtype == object:
             raise ValueError(f"arrays[{name!r}] has dtype object; only numeric arrays are stored")
         clean[name] = a
-    text = json.dumps(meta, default=_json_default, allow_nan=True)
+    text = json.dumps(meta, default=json_default, allow_nan=True)
     clean[_META] = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
@@ -114,9 +114,10 @@ def load_npz(path):
     return arrays, meta
 
 
-def _json_default(value):
+def json_default(value):
+    """``json.dump(default=...)`` for NumPy scalars and arrays (anything else: TypeError)."""
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, np.ndarray):
         return value.tolist()
-    raise TypeError(f"meta: {type(value).__name__} is not JSON serialisable")
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")

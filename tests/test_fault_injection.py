@@ -13,16 +13,15 @@ import pytest
 
 from qsa.flows import CHA, FacetingFlow, solve_flow
 from qsa.io import load_npz
+from qsa.paper import CONVERGENCE
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-PAPER_CHA = dict(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
+PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
 SCRIPT = textwrap.dedent("""
     import sys
-    import numpy as np
     from qsa.flows import CHA, solve_flow
-    th = 2 * np.pi * np.arange(800) / 800
-    r = 1 + 0.35 * np.cos(3 * th)
-    solve_flow(CHA(**{cha}), (r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th)),
+    from qsa.paper import CONVERGENCE
+    solve_flow(CHA(**{cha}), CONVERGENCE.samples(800),
                {T}, N=48, tol={tol}, checkpoint=sys.argv[1], checkpoint_interval=0,
                t_eval=[{T}])
 """)
@@ -30,9 +29,7 @@ T, TOL = 0.08, 1e-5
 
 
 def paper_samples(M=800):
-    th = 2 * np.pi * np.arange(M) / M
-    r = 1 + 0.35 * np.cos(3 * th)
-    return r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th)
+    return CONVERGENCE.samples(M)
 
 
 def test_sigkill_then_resume_gives_the_uninterrupted_result(tmp_path):

@@ -22,13 +22,19 @@ FORBIDDEN = {
     "spectra": {"equilibria", "flows", "continuation", "plotting"},
     "flows": {"equilibria", "spectra", "continuation", "plotting"},
     "continuation": {"flows", "plotting"},
+    "reduction": {"plotting"},
     "geometry": {"energies", "equilibria", "spectra", "flows", "continuation"},
     "curve": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "discretize": {"curve", "geometry", "energies", "equilibria", "spectra", "flows"},
+    "plotting": set(),
 }
+# the paper's reproductions use the library, never the other way
+for _parts in FORBIDDEN.values():
+    _parts.add("paper")
 
 #: modules kept only as deprecated aliases of a moved home
-ALIASES = {"equilibria/continuation.py"}
+ALIASES = {"equilibria/continuation.py", "flows/scenarios.py", "flows/paper_runs.py",
+           "reduction/compare.py"}
 
 
 def _part(path: Path) -> str:

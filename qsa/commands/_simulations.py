@@ -1,4 +1,4 @@
-"""Shared pieces of ``qsa reproduce facet|snowflake|folding`` (options, figures, JSON)."""
+"""Shared pieces of ``qsa reproduce facet|snowflake|folding`` (options, figures, JSON, text)."""
 
 from __future__ import annotations
 
@@ -32,6 +32,15 @@ def cha_arguments(parser):
                              "gives the paper's labyrinths and layers, see CHAScenario)")
 
 
+def cha_scenario(args, rho):
+    """Table T1's :class:`qsa.paper.CHAScenario` with the command line's rho, noise, seed, l*."""
+    from dataclasses import replace
+
+    from qsa.paper import CHAScenario
+
+    return replace(CHAScenario(), rho=rho, noise=args.noise, seed=args.seed, l_star=args.l_star)
+
+
 def progress(args):
     return False if args.no_progress or args.json else None
 
@@ -59,3 +68,35 @@ def emit(args, summary, lines):
 
 def fmt(value, spec=".3g"):
     return "-" if value is None else format(value, spec)
+
+
+def _where(si):
+    """The first crossing's points, e.g. ``13 points, (0.269, 0) ...``."""
+    fc = si.first_crossing
+    if fc is None or not len(fc.points):
+        return "?"
+    x, y = fc.points[0]
+    n = len(fc.points)
+    more = f"{n} points, " if n > 1 else ""
+    return f"{more}({x:.3g}, {y:.3g}){' ...' if n > 1 else ''}"
+
+
+def cha_lines(run):
+    """The text report of a :class:`qsa.paper.CHARun`."""
+    si = run.self_intersection
+    return [
+        f"rho={run.rho:g}, N={run.N}, t={run.t_reached:g}: {run.message}",
+        f"  paired sheets {run.n_sheet_pairs}, separation {fmt(run.separation, '.4g')} "
+        f"vs l* sqrt(a^2+1/2) = {run.separation_target:.4g} "
+        f"(median ratio {fmt(run.separation_ratio, '.3f')}, closest-point ratio "
+        f"{fmt(run.min_separation_ratio, '.3f')}; paper: within 10%)",
+        f"  self-intersection: {'DETECTED' if si.detected else 'none'}"
+        + (f" (t = {si.first_time:.4g} .. {si.last_time:.4g}, "
+           f"{si.n_steps_crossing} steps; first at {_where(si)})" if si.detected else "")
+        + f"; closest approach {fmt(si.closest_approach, '.3g')} at t = "
+          f"{fmt(si.closest_approach_time, '.3g')}",
+        f"  energy {run.energy_initial:.5g} -> {run.energy_final:.5g} (max step increase "
+        f"{run.energy_max_increase:.2g}), length {run.final_length:.4f} "
+        f"(rho L0 = {run.target_length:.4f}), L/N = {run.final_length / run.N:.4g}",
+        f"  steps {run.n_steps} (+{run.n_rejected} rejected), wall {run.wall_seconds:.0f} s",
+    ]

@@ -26,23 +26,29 @@ from __future__ import annotations
 
 import json
 import os
-import time
 
 import numpy as np
 
 HELP = "appendix Table ap:t1: max |X(2N) - X(N)| at t = 0.2 for N = 50 ... 400 (800)"
 
-#: Table ap:t1 of the paper (differences between N and 2N, tol 1e-4).
-PAPER = {50: 0.1909, 100: 0.0397, 200: 0.0101, 400: 0.0024}
-PARAMS = dict(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
-NORMALS = {"centred": "paper's centred normal", "unit": "unit normal (qsa default)"}
+
+def __getattr__(name):
+    """``PAPER`` (Table ap:t1), ``PARAMS`` and ``paper_initial_curve``: aliases of
+    ``qsa.paper.CONVERGENCE`` (loaded on use, so ``qsa --help`` stays quick)."""
+    from qsa.paper import CONVERGENCE
+
+    aliases = {"PAPER": CONVERGENCE.paper_differences, "PARAMS": CONVERGENCE.model_params(),
+               "paper_initial_curve": CONVERGENCE.samples}
+    if name in aliases:
+        return aliases[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def add_arguments(p):
-    p.add_argument("--Ns", type=int, nargs="+", default=[50, 100, 200, 400, 800],
+    p.add_argument("--Ns", type=int, nargs="+", default=None,
                    help="resolutions (default 50 100 200 400 800)")
-    p.add_argument("--tol", type=float, default=1e-4, help="local error tolerance (1e-4)")
-    p.add_argument("--t-final", type=float, default=0.2,
+    p.add_argument("--tol", type=float, default=None, help="local error tolerance (1e-4)")
+    p.add_argument("--t-final", type=float, default=None,
                    help="physical time (default 0.2 = the paper's printed 0.1)")
     p.add_argument("--normal", choices=["centred", "unit", "both"], default="both",
                    help="adhesion-force normal: the paper code's centred difference, the unit "
@@ -53,102 +59,49 @@ def add_arguments(p):
     p.add_argument("--plot", metavar="FILE", help="write the convergence figure to FILE")
 
 
-def paper_initial_curve(M=4000):
-    """The appendix's initial curve (samples at equal theta; 0.05 sin 4 theta added to x)."""
-    th = 2 * np.pi * np.arange(M) / M
-    r = 1 + 0.35 * np.cos(3 * th)
-    return r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th)
-
-
-def run_study(Ns, tol=1e-4, t_final=0.2, force_normal="centred", method="be", verbose=False):
-    """Final node positions for each N and the differences between successive N.
-
-    Returns
-    -------
-    dict
-        ``positions`` {N: (x, y)}, ``steps`` {N: int}, ``seconds`` {N: float},
-        ``differences`` {N: max |X(2N) - X(N)|, componentwise},
-        ``euclidean`` {N: max_j |X_j(2N) - X_j(N)|}.
-    """
-    from qsa.flows import CHA, solve_flow
-
-    model = CHA(**PARAMS, force_normal=force_normal)
-    initial = paper_initial_curve()
-    out = {"positions": {}, "steps": {}, "seconds": {}, "differences": {}, "euclidean": {}}
-    for N in sorted(Ns):
-        t0 = time.perf_counter()
-        res = solve_flow(model, initial, t_final, N=N, tol=tol, method=method,
-                         t_eval=[t_final], progress=False, newton_tol=1e-3 * tol)
-        if not res.success:
-            raise RuntimeError(f"N={N}: {res.message}")
-        out["positions"][N] = np.array(res.positions(-1))
-        out["steps"][N] = res.n_steps
-        out["seconds"][N] = time.perf_counter() - t0
-        if verbose:
-            print(f"  [{force_normal}] N={N}: {res.n_steps} steps, "
-                  f"{out['seconds'][N]:.1f} s", flush=True)
-    for N in sorted(Ns):
-        if 2 * N in out["positions"]:
-            d = out["positions"][N] - out["positions"][2 * N][:, ::2]
-            out["differences"][N] = float(np.max(np.abs(d)))
-            out["euclidean"][N] = float(np.max(np.hypot(d[0], d[1])))
-    return out
-
-
-def _ratios(diff):
-    Ns = sorted(diff)
-    return {N: diff[Np] / diff[N] for Np, N in zip(Ns, Ns[1:], strict=False)}
-
-
 def run(args):
+    from qsa.paper import CONVERGENCE, run_convergence
+    from qsa.paper.appendix import NORMALS
+
+    paper = CONVERGENCE.paper_differences
     normals = ["centred", "unit"] if args.normal == "both" else [args.normal]
-    studies = {n: run_study(args.Ns, args.tol, args.t_final, n, args.method,
-                            verbose=not args.json) for n in normals}
-    rows = sorted({N for s in studies.values() for N in s["differences"]})
-    summary = {"t_final": args.t_final, "tol": args.tol, "method": args.method,
-               "paper": {str(k): v for k, v in PAPER.items()}, "results": {}}
-    for n, s in studies.items():
-        summary["results"][n] = {
-            "differences": {str(k): v for k, v in s["differences"].items()},
-            "euclidean": {str(k): v for k, v in s["euclidean"].items()},
-            "ratios": {str(k): v for k, v in _ratios(s["differences"]).items()},
-            "relative_to_paper": {str(k): s["differences"][k] / PAPER[k]
-                                  for k in s["differences"] if k in PAPER},
-            "steps": {str(k): v for k, v in s["steps"].items()},
-            "seconds": {str(k): v for k, v in s["seconds"].items()}}
+    study = run_convergence(CONVERGENCE, args.Ns, tol=args.tol, t_final=args.t_final,
+                            normals=normals, method=args.method, verbose=not args.json)
+    rows = study.rows
+    summary = study.summary()
     if args.out:
         from qsa.io import save_npz
 
         os.makedirs(args.out, exist_ok=True)
-        arrays = {f"{n}_N{N}": p for n, s in studies.items() for N, p in s["positions"].items()}
-        save_npz(os.path.join(args.out, "positions.npz"), arrays, summary)
+        save_npz(os.path.join(args.out, "positions.npz"), study.arrays(), summary)
     figure = args.plot or (os.path.join(args.out, "convergence.png") if args.out else None)
     if figure and rows:
         from qsa.plotting import new_figure, plot_convergence, save
 
         fig, ax = new_figure()
-        for n, s in studies.items():
-            plot_convergence(rows, [s["differences"][N] for N in rows],
-                             paper=PAPER if n == normals[0] else None, ax=ax,
+        for n, s in study.studies.items():
+            plot_convergence(rows, [s.differences[N] for N in rows],
+                             paper=paper if n == normals[0] else None, ax=ax,
                              label=f"qsa, {NORMALS[n]}")
         save(fig, figure)
         summary["figure"] = figure
     if args.json:
         print(json.dumps(summary, indent=2))
         return 0
-    print(f"\nTable ap:t1: max |X(2N) - X(N)| at common nodes, tol {args.tol:g}, "
-          f"physical t = {args.t_final:g}, method {args.method}")
+    print(f"\nTable ap:t1: max |X(2N) - X(N)| at common nodes, tol {study.tol:g}, "
+          f"physical t = {study.t_final:g}, method {study.method}")
     head = f"{'N':>5} | {'paper':>8} {'ratio':>5}"
     for n in normals:
         head += f" | {n + ' normal':>15} {'ratio':>5} {'/paper':>6}"
     print(head)
     for N in rows:
-        p = PAPER.get(N)
-        pr = PAPER.get(N // 2, np.nan) / p if p and N // 2 in PAPER else np.nan
+        p = paper.get(N)
+        pr = paper.get(N // 2, np.nan) / p if p and N // 2 in paper else np.nan
         line = f"{N:>5} | {p if p else np.nan:>8.4f} {pr:>5.2f}"
         for n in normals:
-            d = studies[n]["differences"][N]
-            r = _ratios(studies[n]["differences"]).get(N, np.nan)
+            s = study.studies[n]
+            d = s.differences[N]
+            r = s.ratios().get(N, np.nan)
             line += f" | {d:>15.4f} {r:>5.2f} {d / p if p else np.nan:>6.2f}"
         print(line)
     print("\nWhy t = 0.2: the paper's code advances its clock by k per accepted pass of two "

@@ -5,8 +5,8 @@ fronts, integrates the front-position ODE (:mod:`qsa.reduction.ode`) from the
 same positions and reports the largest position error before the first
 collision and the predicted against the observed collision time. The paper
 motivates this reduction but does not carry it out, so there is no published
-number to print next to ours; the targets are those of issue 7 (positions
-within 5% of the smallest facet, collision times within 10%).
+number to print next to ours; the targets are positions within 5% of the
+smallest facet and collision times within 10%.
 
 Examples
 --------
@@ -23,13 +23,16 @@ HELP = "front-position ODE vs the DAE faceting flow (positions, collision times)
 
 
 def add_arguments(parser):
-    from qsa.reduction.compare import SCENARIOS
+    from qsa.paper.scenarios import SCENARIOS
 
     parser.add_argument("--scenario", choices=sorted(SCENARIOS), default="triangle",
                         help="initial splice (default triangle)")
-    parser.add_argument("--alpha", type=float, default=0.1, help="front width (default 0.1)")
-    parser.add_argument("--kstar", type=float, default=5.0, help="corner curvature (default 5)")
-    parser.add_argument("--beta", type=float, default=5.0, help="perimeter penalty (default 5)")
+    parser.add_argument("--alpha", type=float, default=None,
+                        help="front width (default: the scenario's, 0.1)")
+    parser.add_argument("--kstar", type=float, default=None,
+                        help="corner curvature (default: the scenario's, 5)")
+    parser.add_argument("--beta", type=float, default=None,
+                        help="perimeter penalty (default: the scenario's, 5)")
     parser.add_argument("--N", type=int, default=1200,
                         help="DAE nodes (default 1200; collision times converge like N^-2)")
     parser.add_argument("--t-final", type=float, default=None,
@@ -101,20 +104,18 @@ def _report(s):
 
 
 def run(args):
-    from qsa.reduction.compare import compare_fronts
+    from qsa.paper import compare_eigenvalues, compare_fronts, front_scenario
 
     if args.N < 50:
         raise ValueError(f"--N must be at least 50, got {args.N}")
-    result = compare_fronts(args.scenario, alpha=args.alpha, kstar=args.kstar, beta=args.beta,
-                            N=args.N, t_final=args.t_final, tol=args.tol,
+    sc = front_scenario(args.scenario, alpha=args.alpha, kstar=args.kstar, beta=args.beta)
+    result = compare_fronts(sc, N=args.N, t_final=args.t_final, tol=args.tol,
                             correction=None if args.correction == "none" else args.correction,
                             reference_N=args.dae_check)
-    summary = dict(result.summary)
+    summary = result.summary()
     if args.eigenvalues:
-        from qsa.reduction.compare import compare_eigenvalues
-
         summary["eigenvalues"] = {
-            name: compare_eigenvalues(n, alpha=args.alpha, kstar=args.kstar)
+            name: compare_eigenvalues(n, alpha=sc.alpha, kstar=sc.kstar).summary()
             for name, n in (("triangle", 3), ("square", 4))}
     plots = []
     if args.plot:

@@ -14,21 +14,28 @@ from __future__ import annotations
 
 import json
 import os
-import time
 
 import numpy as np
 
 HELP = "appendix: time steps for tol 1e-3 ... 1e-6 at N = 100 (paper: 65, 180, 571, 1811)"
 
-#: The appendix's step counts at N = 100.
-PAPER = {1e-3: 65, 1e-4: 180, 1e-5: 571, 1e-6: 1811}
+
+
+def __getattr__(name):
+    """``PAPER``, the appendix's step counts at N = 100: an alias of
+    ``qsa.paper.CONVERGENCE.paper_steps`` (loaded on use, so ``qsa --help`` stays quick)."""
+    if name == "PAPER":
+        from qsa.paper import CONVERGENCE
+
+        return CONVERGENCE.paper_steps
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def add_arguments(p):
-    p.add_argument("--tols", type=float, nargs="+", default=sorted(PAPER, reverse=True),
+    p.add_argument("--tols", type=float, nargs="+", default=None,
                    help="tolerances (default 1e-3 1e-4 1e-5 1e-6)")
-    p.add_argument("--N", type=int, default=100, help="nodes (default 100)")
-    p.add_argument("--t-final", type=float, default=0.2, help="physical time (default 0.2)")
+    p.add_argument("--N", type=int, default=None, help="nodes (default 100)")
+    p.add_argument("--t-final", type=float, default=None, help="physical time (default 0.2)")
     p.add_argument("--normal", choices=["centred", "unit"], default="centred",
                    help="adhesion-force normal (default: the paper code's centred normal)")
     p.add_argument("--no-bdf2", action="store_true", help="skip the BDF2 column")
@@ -37,48 +44,14 @@ def add_arguments(p):
     p.add_argument("--plot", metavar="FILE", help="write the steps-vs-tol figure to FILE")
 
 
-def count_steps(tols, N=100, t_final=0.2, method="be", force_normal="centred"):
-    """Accepted steps (and rejections, CPU seconds) per tolerance for the appendix example."""
-    from qsa.commands.reproduce_convergence import PARAMS, paper_initial_curve
-    from qsa.flows import CHA, solve_flow
-
-    model = CHA(**PARAMS, force_normal=force_normal)
-    initial = paper_initial_curve()
-    out = {}
-    for tol in tols:
-        t0 = time.process_time()
-        res = solve_flow(model, initial, t_final, N=N, tol=tol, method=method,
-                         t_eval=[t_final], progress=False, newton_tol=1e-3 * tol)
-        if not res.success:
-            raise RuntimeError(f"tol={tol:g}: {res.message}")
-        out[tol] = {"steps": res.n_steps, "rejected": res.n_rejected,
-                    "newton": res.n_newton, "cpu_seconds": time.process_time() - t0}
-    return out
-
-
-def growth_per_decade(tols, steps):
-    """Least-squares factor of steps per tenfold decrease of tol."""
-    slope = np.polyfit(np.log10(tols), np.log10(steps), 1)[0]
-    return float(10 ** (-slope))
-
-
 def run(args):
-    tols = sorted(args.tols, reverse=True)
-    be = count_steps(tols, args.N, args.t_final, "be", args.normal)
-    bdf = {} if args.no_bdf2 else count_steps(tols, args.N, args.t_final, "bdf2", args.normal)
-    summary = {"N": args.N, "t_final": args.t_final, "force_normal": args.normal,
-               "paper": {f"{k:g}": v for k, v in PAPER.items()},
-               "be": {f"{k:g}": v for k, v in be.items()},
-               "bdf2": {f"{k:g}": v for k, v in bdf.items()}}
-    if len(tols) >= 2:
-        summary["growth_per_decade"] = {
-            "be": growth_per_decade(tols, [be[t]["steps"] for t in tols]),
-            "paper": growth_per_decade(sorted(PAPER, reverse=True),
-                                       [PAPER[t] for t in sorted(PAPER, reverse=True)]),
-            "sqrt10": float(np.sqrt(10))}
-        if bdf:
-            summary["growth_per_decade"]["bdf2"] = growth_per_decade(
-                tols, [bdf[t]["steps"] for t in tols])
+    from qsa.paper import CONVERGENCE, run_timesteps
+
+    paper_steps = CONVERGENCE.paper_steps
+    steps = run_timesteps(CONVERGENCE, args.tols, N=args.N, t_final=args.t_final,
+                          force_normal=args.normal, bdf2=not args.no_bdf2)
+    tols, be, bdf = steps.tols, steps.be, steps.bdf2
+    summary = steps.summary()
     if args.out:
         os.makedirs(args.out, exist_ok=True)
         with open(os.path.join(args.out, "summary.json"), "w") as fh:
@@ -87,31 +60,31 @@ def run(args):
     if figure:
         from qsa.plotting import plot_timesteps, save
 
-        series = {"qsa backward Euler": [be[t]["steps"] for t in tols]}
+        series = {"qsa backward Euler": [be[t].steps for t in tols]}
         if bdf:
-            series["qsa BDF2"] = [bdf[t]["steps"] for t in tols]
-        paper = [PAPER.get(t, np.nan) for t in tols]
+            series["qsa BDF2"] = [bdf[t].steps for t in tols]
+        paper = [paper_steps.get(t, np.nan) for t in tols]
         ax = plot_timesteps(tols, series, paper=paper)
         save(ax.figure, figure)
         summary["figure"] = figure
     if args.json:
         print(json.dumps(summary, indent=2))
         return 0
-    print(f"\nTime steps of the appendix example, N = {args.N}, physical t = {args.t_final:g} "
+    print(f"\nTime steps of the appendix example, N = {steps.N}, physical t = {steps.t_final:g} "
           f"({args.normal} adhesion normal)")
     print(f"{'tol':>7} | {'paper':>6} | {'qsa BE':>7} {'/paper':>7} {'rejected':>8} "
           f"{'cpu [s]':>8}" + ("" if not bdf else f" | {'qsa BDF2':>8} {'cpu [s]':>8}"))
     for t in tols:
-        p = PAPER.get(t)
+        p = paper_steps.get(t)
         b = be[t]
-        line = (f"{t:>7.0e} | {p if p else '':>6} | {b['steps']:>7} "
-                f"{b['steps'] / p if p else np.nan:>7.3f} {b['rejected']:>8} "
-                f"{b['cpu_seconds']:>8.2f}")
+        line = (f"{t:>7.0e} | {p if p else '':>6} | {b.steps:>7} "
+                f"{b.steps / p if p else np.nan:>7.3f} {b.rejected:>8} "
+                f"{b.cpu_seconds:>8.2f}")
         if bdf:
-            line += f" | {bdf[t]['steps']:>8} {bdf[t]['cpu_seconds']:>8.2f}"
+            line += f" | {bdf[t].steps:>8} {bdf[t].cpu_seconds:>8.2f}"
         print(line)
-    if "growth_per_decade" in summary:
-        g = summary["growth_per_decade"]
+    g = steps.growth_per_decade()
+    if g is not None:
         print(f"growth per decade: qsa BE {g['be']:.3f}, paper {g['paper']:.3f}, "
               f"sqrt(10) = {g['sqrt10']:.3f}" + (f"; BDF2 {g['bdf2']:.3f} (10^(1/3) = "
                                                    f"{10 ** (1 / 3):.3f})" if bdf else ""))

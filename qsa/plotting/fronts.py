@@ -15,7 +15,7 @@ def plot_front_tracks(comparison, axes=None, title=None):
     Parameters
     ----------
     comparison : FrontComparison
-        From :func:`qsa.reduction.compare.compare_fronts`.
+        From :func:`qsa.paper.compare_fronts`.
     axes : pair of Axes, optional
         Left: positions (zero mean) against t with the collision times; right:
         the position error / smallest facet against ``t / t_c`` (DAE).

@@ -1,9 +1,8 @@
 """Figures of the paper's simulations (f:facet, f:facet_energy, f:Snowflake, f:fold).
 
 The drawing functions take plain arrays; ``facet_figures``, ``cha_figures``
-and ``folding_figure`` take the ``arrays``/``summary`` of a
-:class:`qsa.flows.paper_runs.RunOutput` (or the same dictionaries loaded from
-its ``.npz``/``.json`` files).
+and ``folding_figure`` take the results of :func:`qsa.paper.run_facet` and
+:func:`qsa.paper.run_cha` (:class:`qsa.paper.FacetRun`, :class:`qsa.paper.CHARun`).
 """
 
 from __future__ import annotations
@@ -166,44 +165,44 @@ def plot_energy_history(t, energy, ax=None, label=None, color="C0"):
     return fig
 
 
-# ------------------------------------------------------------ run outputs
-def facet_figures(arrays, summary):
-    """The facet run's figures: ``{"panels", "energy", "fronts"}``."""
-    N = int(summary["params"]["N"])
-    Y = np.asarray(arrays["snap_states"])
+# ------------------------------------------------------------ run results
+def facet_figures(run):
+    """The figures of a :class:`qsa.paper.FacetRun`: ``{"panels", "energy", "fronts"}``."""
+    sc = run.scenario
+    N = int(sc.N)
+    Y = np.asarray(run.snap_states)
     xs, ys, ks = Y[:, :N], Y[:, N : 2 * N], Y[:, 2 * N : 3 * N]
-    times = _reached(summary["params"]["figure_times"], arrays["snap_t"], summary["t_reached"])
-    events = [e["t"] for e in summary["events"]]
-    panels = plot_facet_panels(arrays["snap_t"], xs, ys, ks, times,
-                               kstar=summary["params"]["kstar"])
-    panels.suptitle(f"faceting coarsening: alpha={summary['params']['alpha']:g}, "
-                    f"beta={summary['params']['beta']:g}, kappa*={summary['params']['kstar']:g},"
-                    f" N={N}")
-    energy = plot_energy_residual(arrays["t"], arrays["energy"], arrays["R_kappa"], events)
-    fronts = plot_front_count(arrays["t"], arrays["fronts"], events)
+    times = _reached(sc.figure_times, run.snap_t, run.t_reached)
+    events = [e.t for e in run.coarsening.events]
+    panels = plot_facet_panels(run.snap_t, xs, ys, ks, times, kstar=sc.kstar)
+    panels.suptitle(f"faceting coarsening: alpha={sc.alpha:g}, beta={sc.beta:g}, "
+                    f"kappa*={sc.kstar:g}, N={N}")
+    energy = plot_energy_residual(run.t, run.energy, run.R_kappa, events)
+    fronts = plot_front_count(run.t, run.fronts, events)
     return {"panels": panels, "energy": energy, "fronts": fronts}
 
 
-def cha_figures(arrays, summary, times=None):
-    """A CHA run's figures: ``{"snapshots", "energy"}`` (f:Snowflake layout).
+def cha_figures(run, times=None):
+    """The figures of a :class:`qsa.paper.CHARun`: ``{"snapshots"}`` (f:Snowflake layout).
 
     Snapshots at ``times`` (default: the scenario's figure times), shaded,
     three per row, and the energy against time below.
     """
-    times = list(summary["params"]["figure_times"] if times is None else times)
-    times = _reached(times, arrays["snap_t"], summary["t_reached"])
+    sc = run.scenario
+    times = list(sc.figure_times if times is None else times)
+    times = _reached(times, run.snap_t, run.t_reached)
     ncols = 3
     nrows = -(-len(times) // ncols)
     fig, axes = new_figure(ncols=ncols, nrows=nrows + 1, size=(3.0, 3.0))
     axes = np.atleast_2d(axes)
-    snap_t = np.asarray(arrays["snap_t"])
-    xs, ys = np.asarray(arrays["snap_x"]), np.asarray(arrays["snap_y"])
+    snap_t = np.asarray(run.snap_t)
+    xs, ys = np.asarray(run.snap_x), np.asarray(run.snap_y)
     for k, ax in enumerate(axes[:nrows].ravel()):
         if k >= len(times):
             ax.set_visible(False)
             continue
-        if times[k] == 0 and "x0" in arrays:
-            x, y, t = arrays["x0"], arrays["y0"], 0.0
+        if times[k] == 0:
+            x, y, t = run.x0, run.y0, 0.0
         else:
             i = _nearest(snap_t, times[k])
             x, y, t = xs[i], ys[i], snap_t[i]
@@ -212,11 +211,9 @@ def cha_figures(arrays, summary, times=None):
     for ax in axes[-1]:
         ax.remove()
     ax = fig.add_subplot(gs[-1, :])
-    plot_energy_history(arrays["t_steps"], arrays["energy_steps"], ax=ax)
-    params = summary["params"]
-    ls = params.get("l_star", 0.01)
-    source = "Table T1" if ls == 0.01 else f"Table T1 but l* = {ls:g}"
-    fig.suptitle(f"CHA flow, rho = {params['rho']:g} ({source}), N = {params['N']}")
+    plot_energy_history(run.t_steps, run.energy_steps, ax=ax)
+    source = "Table T1" if sc.l_star == 0.01 else f"Table T1 but l* = {sc.l_star:g}"
+    fig.suptitle(f"CHA flow, rho = {sc.rho:g} ({source}), N = {run.N}")
     return {"snapshots": fig}
 
 
@@ -229,7 +226,7 @@ def folding_figure(runs, times=(0.02, 0.3, None)):
 
     Parameters
     ----------
-    runs : list of (arrays, summary)
+    runs : sequence of CHARun
     times : sequence
         Column times; ``None`` means the final state. Times beyond a run's end
         are replaced by log-spaced times between its first snapshot and its end.
@@ -237,27 +234,27 @@ def folding_figure(runs, times=(0.02, 0.3, None)):
     nrows = len(runs)
     fig, axes = new_figure(ncols=len(times), nrows=nrows + 1, size=(3.0, 3.0))
     axes = np.atleast_2d(axes)
-    for r, (arrays, summary) in enumerate(runs):
-        snap_t = np.asarray(arrays["snap_t"])
-        rho = summary["params"]["rho"]
+    for r, run in enumerate(runs):
+        snap_t = np.asarray(run.snap_t)
         for c, t in enumerate(_column_times(times, snap_t)):
             ax = axes[r, c]
-            if c == 0 and "crossing_x" in arrays:
-                tc = float(arrays["crossing_t"])
-                plot_shaded_curve(arrays["crossing_x"], arrays["crossing_y"], ax=ax,
-                                  title=f"rho={rho:g}, t={tc:.3g} (crossing)", color=f"C{r}")
-                pts = np.atleast_2d(arrays["crossing_points"])
+            fc = run.first_crossing
+            if c == 0 and fc is not None:
+                plot_shaded_curve(fc.x, fc.y, ax=ax,
+                                  title=f"rho={run.rho:g}, t={fc.t:.3g} (crossing)",
+                                  color=f"C{r}")
+                pts = np.atleast_2d(fc.points)
                 ax.plot(pts[:, 0], pts[:, 1], "o", mfc="none", mec="red", ms=9, mew=1.5)
                 continue
             i = len(snap_t) - 1 if t is None else _nearest(snap_t, t)
-            plot_shaded_curve(arrays["snap_x"][i], arrays["snap_y"][i], ax=ax,
-                              title=f"rho={rho:g}, t={snap_t[i]:.3g}", color=f"C{r}")
+            plot_shaded_curve(run.snap_x[i], run.snap_y[i], ax=ax,
+                              title=f"rho={run.rho:g}, t={snap_t[i]:.3g}", color=f"C{r}")
     gs = axes[-1, 0].get_gridspec()
     for ax in axes[-1]:
         ax.remove()
     ax = fig.add_subplot(gs[-1, :])
-    for r, (arrays, summary) in enumerate(runs):
-        plot_energy_history(arrays["t_steps"], arrays["energy_steps"], ax=ax,
-                            label=f"rho={summary['params']['rho']:g}", color=f"C{r}")
+    for r, run in enumerate(runs):
+        plot_energy_history(run.t_steps, run.energy_steps, ax=ax, label=f"rho={run.rho:g}",
+                            color=f"C{r}")
     ax.legend(fontsize=8)
     return fig

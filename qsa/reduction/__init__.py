@@ -3,11 +3,14 @@
 :mod:`qsa.reduction.fronts` detects and tracks the fronts of any curvature
 profile; :mod:`qsa.reduction.ode` is the front-position ODE ``p' = F(p)`` on the
 manifold of heteroclinic splices ``psi_N(p)`` (see its docstring for the
-derivation of the metric); :mod:`qsa.reduction.compare` validates it against the
-DAE flow and the full linearization (``qsa reproduce fronts``).
+derivation of the metric). Its validation against the DAE flow and the full
+linearization (``qsa reproduce fronts``) is :mod:`qsa.paper.fronts`;
+``SCENARIOS``, ``compare_fronts`` and ``compare_eigenvalues`` stay importable
+from here as aliases.
 """
 
-from qsa.reduction.compare import SCENARIOS, compare_eigenvalues, compare_fronts
+import importlib
+
 from qsa.reduction.fronts import (
     CoarseningEvent,
     Fronts,
@@ -21,3 +24,13 @@ from qsa.reduction.ode import FrontODE, FrontODEResult, collision_distance, coll
 __all__ = ["CoarseningEvent", "Fronts", "FrontTracks", "detect_fronts", "track_flow",
            "track_fronts", "FrontODE", "FrontODEResult", "collision_distance",
            "collision_sensitivity", "SCENARIOS", "compare_fronts", "compare_eigenvalues"]
+
+#: aliases of qsa.paper, resolved on first use (qsa.paper imports this package)
+_PAPER_ALIASES = {"SCENARIOS": "qsa.paper.scenarios", "compare_fronts": "qsa.paper.fronts",
+                  "compare_eigenvalues": "qsa.paper.fronts"}
+
+
+def __getattr__(name):
+    if name in _PAPER_ALIASES:
+        return getattr(importlib.import_module(_PAPER_ALIASES[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

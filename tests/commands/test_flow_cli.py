@@ -8,6 +8,7 @@ import pytest
 
 from qsa.cli import main
 from qsa.io import load_npz
+from qsa.paper import CONVERGENCE
 
 
 def test_flow_cha_writes_data_figure_and_resumes(tmp_path, capsys):
@@ -58,11 +59,10 @@ def test_reproduce_timesteps_fast_variant(capsys):
 # --------------------------------------------------------- the paper's runs
 @pytest.mark.slow
 def test_reproduce_convergence_matches_the_paper(capsys):
-    from qsa.commands.reproduce_convergence import PAPER
-
+    paper = CONVERGENCE.paper_differences
     assert main(["reproduce", "convergence", "--normal", "centred", "--json"]) == 0
     s = json.loads(capsys.readouterr().out)["results"]["centred"]
-    paper_ratio = {N: PAPER[N // 2] / PAPER[N] for N in PAPER if N // 2 in PAPER}
+    paper_ratio = {N: paper[N // 2] / paper[N] for N in paper if N // 2 in paper}
     for N, ratio in s["ratios"].items():
         # the paper's own first ratio is 4.81 (pre-asymptotic at N = 100): ours follows it
         # within 5%; from N = 200 on both are second order, 4 +- 0.6
@@ -71,15 +71,14 @@ def test_reproduce_convergence_matches_the_paper(capsys):
         if int(N) >= 200:
             assert abs(ratio - 4) <= 0.6, (N, ratio)
     for N, d in s["differences"].items():
-        assert abs(d / PAPER[int(N)] - 1) <= 0.25, (N, d)
+        assert abs(d / paper[int(N)] - 1) <= 0.25, (N, d)
 
 
 @pytest.mark.slow
 def test_reproduce_timesteps_matches_the_paper(capsys):
-    from qsa.commands.reproduce_timesteps import PAPER
-
+    paper = CONVERGENCE.paper_steps
     assert main(["reproduce", "timesteps", "--no-bdf2", "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
-    for tol, steps in PAPER.items():
+    for tol, steps in paper.items():
         assert abs(s["be"][f"{tol:g}"]["steps"] / steps - 1) <= 0.15
     assert abs(s["growth_per_decade"]["be"] / np.sqrt(10) - 1) <= 0.2

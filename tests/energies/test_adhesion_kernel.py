@@ -15,9 +15,10 @@ from qsa.energies.adhesion import (
     dense_pairs,
     pair_list,
 )
+from qsa.paper import CONVERGENCE, CHAScenario
 
-PAPER_CHA = AdhesionKernel(A0=10.0, l_star=0.5, a=1.0)  # appendix convergence study
-PAPER_FOLD = AdhesionKernel(A0=40.0, l_star=0.01, a=1.0)  # Table T1
+PAPER_CHA = CONVERGENCE.model().kernel  # appendix convergence study
+PAPER_FOLD = CHAScenario().model().kernel  # Table T1
 
 
 def wobbly_curve(N, amp=0.35, k=3, scale=1.0, seed=None):

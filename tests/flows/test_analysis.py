@@ -14,7 +14,6 @@ from qsa.flows.analysis import (
     paired_sheets,
     rotation_defect,
 )
-from qsa.flows.paper_runs import coarsening_events
 from qsa.resample import resample_closed
 
 
@@ -60,14 +59,6 @@ def test_functional_residual_is_spread_about_the_mean():
     mu = np.array([0.0, 0.0, 0.0, 4.0])
     assert functional_residual(mu) == pytest.approx(3.0)
     assert functional_residual(mu, weights=[1, 1, 1, 3]) == pytest.approx(2.0)
-
-
-def test_coarsening_events_ignore_flicker():
-    t = np.arange(9.0)
-    counts = [0, 6, 18, 16, 18, 14, 16, 8, 6]
-    peak, t_peak, events = coarsening_events(t, counts)
-    assert (peak, t_peak) == (18, 2.0)
-    assert events == [(3.0, 18, 16), (5.0, 16, 14), (7.0, 14, 8), (8.0, 8, 6)]
 
 
 def polar_nodes(r, N=600, rotate=0.0, shift=(0.0, 0.0)):

@@ -2,6 +2,7 @@
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -9,9 +10,11 @@ from scipy.sparse.linalg import splu
 
 from qsa.flows.base import DAESystem, FlowModel
 from qsa.flows.dae import CHA, FacetingFlow
+from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
 
-PAPER_CHA = dict(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
+PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
+TABLE_T1 = CHAScenario()
 
 
 # ----------------------------------------------------------------- curves
@@ -25,11 +28,8 @@ def smooth_curve(N, scale=1.3, shift=0.05):
 
 
 def paper_curve(N):
-    """The convergence study's start r = 1 + 0.35 cos 3 theta (+ 0.05 sin 4 theta in x)."""
-    th = 2 * np.pi * np.arange(2000) / 2000
-    r = 1 + 0.35 * np.cos(3 * th)
-    x, y, _ = resample_closed(r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th), N,
-                              method="chord")
+    """Equal-chord nodes of the convergence study's start (2000 samples resampled)."""
+    x, y, _ = resample_closed(*CONVERGENCE.samples(2000), N, method="chord")
     return x, y
 
 
@@ -55,7 +55,7 @@ MODELS = {
     "cha-neighbours": CHA(**PAPER_CHA),
     "cha-dense": CHA(**PAPER_CHA, adhesion_method="dense"),
     "cha-centred-normal": CHA(**PAPER_CHA, force_normal="centred"),
-    "cha-short-kernel": CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=0.35, a=1.0),
+    "cha-short-kernel": replace(TABLE_T1, l_star=0.35).model(),
     "ch-no-adhesion": CHA(eps=0.1, beta=1.0, rho=1.5),
     "facet": FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0),
     "facet-user-well": FacetingFlow(alpha=0.2, kstar=2.0, beta=1.0, L_star=7.0,
@@ -346,9 +346,8 @@ def test_neighbour_list_model_matches_dense_model_table_T1_kernel():
     r = 0.7 * (1 + 0.12 * np.tanh(4 * np.cos(13 * th)))
     # equal arc length, then setup's projection to equal chords (chord spread ~1e-4 here)
     x, y, _ = resample_closed(r * np.cos(th), r * np.sin(th), N)
-    params = dict(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=0.01, a=1.0)
-    nb = CHA(**params).setup(x, y)
-    de = CHA(**params, adhesion_method="dense").setup(x, y)
+    nb = TABLE_T1.model().setup(x, y)
+    de = replace(TABLE_T1.model(), adhesion_method="dense").setup(x, y)
     rng = np.random.default_rng(2)
     yy = nb.y0.copy()
     yy[: 2 * N] += 1e-4 * rng.standard_normal(2 * N)

@@ -9,14 +9,13 @@ from scipy.integrate import solve_ivp
 
 from qsa import Curve, FiniteDifference
 from qsa.flows import CHA, FacetingFlow, FlowResult, solve_flow
+from qsa.paper import CONVERGENCE
 
-PAPER_CHA = dict(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
+PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
 
 
 def paper_samples(M=2000):
-    th = 2 * np.pi * np.arange(M) / M
-    r = 1 + 0.35 * np.cos(3 * th)
-    return r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th)
+    return CONVERGENCE.samples(M)
 
 
 def wobbly_samples(M=2000, amp=0.1, lobes=3, scale=1.3):

@@ -1,6 +1,8 @@
 """Steppers: linear solvers agree, simplified Newton solves the same equations as full Newton,
 BDF2 is second order and needs far fewer steps than backward Euler for the same accuracy."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -13,9 +15,10 @@ from qsa.flows.stepper import (
     factorize,
     interleaved_ordering,
 )
+from qsa.paper import CONVERGENCE, CHAScenario
 from tests.flows.test_dae import paper_curve
 
-PAPER_CHA = dict(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
+PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
 
 
 paper_xy = paper_curve  # equal-chord nodes of the appendix example
@@ -50,7 +53,7 @@ def test_linear_solvers_agree(c):
         x = lu.solve(b)
         assert np.linalg.norm(J @ x - b) <= 1e-9 * np.linalg.norm(b)
         assert np.linalg.norm(x - x_ref) <= 1e-7 * np.linalg.norm(x_ref)
-    short = CHA(eps=0.08, beta=60.0, rho=1.3, A0=40.0, l_star=0.05, a=1.0).setup(
+    short = replace(CHAScenario(), l_star=0.05).model().setup(
         *paper_xy(200))
     assert isinstance(factorize(short, short.y0, 0 * short.y0, c), SparseLU)
     assert isinstance(factorize(sys, y, ydot, c, "dense"), DenseLU)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from qsa.equilibria import splice_closure, splice_polygon
+from qsa.paper import SCENARIOS, scenario_splice
 from qsa.reduction.ode import FrontODE, collision_distance, collision_sensitivity
 
 ALPHA, KSTAR = 0.1, 5.0
@@ -11,7 +12,7 @@ ALPHA, KSTAR = 0.1, 5.0
 
 @pytest.fixture(scope="module")
 def triangle():
-    eq = splice_polygon(np.deg2rad([130, 120, 110]), [0.3, 0.4, 0.5], ALPHA, kstar=KSTAR)
+    eq = scenario_splice("triangle", ALPHA, KSTAR)
     p = np.array(eq.params["positions"])
     ode = FrontODE(ALPHA, KSTAR, eq.params["L"], points_per_width=8)
     return ode, p, tuple(eq.params["cutoff"])
@@ -131,8 +132,7 @@ def test_collision_sensitivity_exact_for_pair_law():
 
 
 def test_integrate_removes_pair_and_recloses():
-    eq = splice_polygon(np.deg2rad([90, 90, 80, 100]), [0.5, 0.28, 0.5, 0.35], ALPHA,
-                        kstar=KSTAR)
+    eq = scenario_splice("short-facet", ALPHA, KSTAR)
     p = np.array(eq.params["positions"])
     ode = FrontODE(ALPHA, KSTAR, eq.params["L"])
     r = ode.integrate(p, 0.08, rtol=1e-6, max_collisions=1)
@@ -167,8 +167,7 @@ def test_bad_input(triangle):
         ode.integrate(p, -1.0)
 
 
-@pytest.mark.parametrize("angles, facets", [([130, 120, 110], [0.3, 0.4, 0.5]),
-                                            ([90, 90, 80, 100], [0.5, 0.28, 0.5, 0.35])])
+@pytest.mark.parametrize("angles, facets", [(s.angles, s.facets) for s in SCENARIOS.values()])
 def test_galerkin_identity_with_full_normal_velocity(angles, facets):
     # <V^n, phi_j^perp> = -dE/dp_j on the tangent space: V^n from qsa.energies (e:Facet-NV)
     # on the splice curve, phi from the ODE's own pull-back -- independent code paths
@@ -206,8 +205,6 @@ def test_collision_across_the_base_point():
 
 @pytest.mark.parametrize("scenario", ["triangle", "short-facet"])
 def test_length_derivatives_match_differences(scenario):
-    from qsa.reduction.compare import scenario_splice
-
     eq = scenario_splice(scenario)
     p, L, cut = np.array(eq.params["positions"]), eq.params["L"], tuple(eq.params["cutoff"])
     ode = FrontODE(ALPHA, KSTAR, L, beta=5.0, points_per_width=8)
@@ -252,7 +249,6 @@ def test_variable_length_implicit_matches_explicit():
     The approximate Jacobian only steers Radau's Newton iterations; a wrong one would
     show as failed or wandering steps. Short facet, beta = 5 (mildly stiff: RK45 copes).
     """
-    from qsa.reduction.compare import scenario_splice
 
     eq = scenario_splice("short-facet")
     p, L = np.array(eq.params["positions"]), eq.params["L"]
@@ -284,8 +280,6 @@ def test_slow_correction_is_a_newton_step(triangle):
 
 
 def _correction_errors(ppw, state):
-    from qsa.reduction.compare import scenario_splice
-
     eq = scenario_splice(state)
     p, L, cut = np.array(eq.params["positions"]), eq.params["L"], tuple(eq.params["cutoff"])
     ode = FrontODE(ALPHA, KSTAR, L, correction="newton", points_per_width=ppw)
@@ -322,7 +316,6 @@ def test_newton_correction_matches_dae_collision_time():
     """Short facet: the corrected force closes the facet at the DAE's (stiff-perimeter) rate."""
     from qsa import FiniteDifference
     from qsa.flows import FacetingFlow, solve_flow
-    from qsa.reduction.compare import scenario_splice
     from qsa.reduction.fronts import detect_fronts, track_flow
 
     eq = scenario_splice("short-facet", ALPHA, KSTAR, grid=FiniteDifference(600))
@@ -351,7 +344,6 @@ def test_auto_method_picks_radau_only_for_a_stiff_perimeter_mode():
     Same choice -> same step sequence -> identical collision times; and the other method
     would give a different one (the test can tell them apart).
     """
-    from qsa.reduction.compare import SCENARIOS, scenario_splice
 
     for name, expected, other in (("short-facet", "RK45", "Radau"), ("triangle", "Radau", "RK45")):
         eq = scenario_splice(name)

@@ -7,7 +7,7 @@ import pytest
 
 import qsa.reduction
 from qsa.equilibria import close_positions
-from qsa.reduction.compare import SCENARIOS, scenario_splice
+from qsa.paper import SCENARIOS, scenario_splice
 from qsa.reduction.ode import FrontODE
 
 ALPHA, KSTAR = 0.1, 5.0

@@ -6,28 +6,30 @@ import json
 import numpy as np
 import pytest
 
-from qsa.reduction.compare import compare_eigenvalues, compare_fronts
+from qsa.paper import SCENARIOS, Scenario, compare_eigenvalues, compare_fronts
 
 
 def test_slow_eigenvalues_match_full_linearization():
     # equilateral triangle (polished to an exact equilibrium): a double slow pair
     r = compare_eigenvalues(3, facet=0.35, N=285)
-    assert r["polish_success"]
-    assert max(abs(np.array(r["rigid"]))) < 0.01 * min(r["full"])  # kernel well separated
-    assert r["max_rel_diff"] < 0.1
-    assert min(r["full"]) > 0  # facets attract: splices are unstable
+    assert r.polish_success
+    assert max(abs(r.rigid)) < 0.01 * min(r.full)  # kernel well separated
+    assert r.max_rel_diff < 0.1
+    assert min(r.full) > 0  # facets attract: splices are unstable
+    assert r.summary()["n_corners"] == 3 and r.summary()["reduced"] == r.reduced.tolist()
 
 
 @pytest.mark.slow
 def test_slow_eigenvalues_square():
-    r = compare_eigenvalues(4, facet=0.35, N=285)
-    assert len(r["reduced"]) == 4 and r["max_rel_diff"] < 0.1
+    r = compare_eigenvalues(Scenario.regular(4, 0.35), N=285)
+    assert len(r.reduced) == 4 and r.max_rel_diff < 0.1
 
 
 def test_short_facet_fast_variant():
     # coarse DAE (N = 400): collision time within 10%, early positions close
     c = compare_fronts("short-facet", N=400)
-    s = c.summary
+    s = c.summary()
+    assert s["collision_dae"] == c.collision_dae and s["max_error"] == c.max_error
     assert np.isfinite(s["collision_dae"]) and np.isfinite(s["collision_ode"])
     assert s["collision_rel_diff"] < 0.1
     assert s["error_at"]["0.5"] < 0.05
@@ -43,7 +45,7 @@ def test_short_facet_fast_variant():
 def test_short_facet_newton_correction():
     # the corrected force (qsa.reduction.ode, "Accuracy") with the length as an unknown:
     # collision time within 1% (uncorrected 2.4%), positions within 5% to 0.99 t_c
-    s = compare_fronts("short-facet", N=600, correction="newton").summary
+    s = compare_fronts("short-facet", N=600, correction="newton").summary()
     assert s["correction"] == "newton"
     v = s["variable_length"]
     assert v["collision_rel_diff"] < 0.01
@@ -54,7 +56,7 @@ def test_short_facet_newton_correction():
 @pytest.mark.slow
 @pytest.mark.parametrize("scenario", ["triangle", "short-facet"])
 def test_dae_vs_ode_resolved(scenario):
-    s = compare_fronts(scenario, N=1200).summary
+    s = compare_fronts(scenario, N=1200).summary()
     assert s["collision_rel_diff"] < 0.1
     # within 5% of the smallest facet up to 0.95 t_c; beyond, the error grows like
     # eps / (1 - t/t_c) (see qsa.reduction.ode, "Validity")
@@ -90,6 +92,9 @@ def test_reproduce_fronts_cli(tmp_path, capsys):
 
 
 def test_no_collision_before_t_final():
-    s = compare_fronts("short-facet", N=300, t_final=0.01).summary
+    # the old keyword signature (alpha, kstar, beta next to the scenario) still works
+    s = compare_fronts(SCENARIOS["short-facet"], N=300, t_final=0.01, alpha=0.1, kstar=5.0,
+                       beta=5.0).summary()
+    assert (s["alpha"], s["kstar"], s["beta"]) == (0.1, 5.0, 5.0)
     assert np.isnan(s["collision_dae"]) and np.isnan(s["collision_ode"])
     assert np.isfinite(s["max_error"]) and s["max_error"] < 0.05

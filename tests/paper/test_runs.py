@@ -1,4 +1,4 @@
-"""The paper's simulations: short versions (default suite) and full runs (slow)."""
+"""The paper's simulation runs: short versions (default suite) and full runs (slow)."""
 
 import json
 import math
@@ -7,10 +7,18 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from qsa.commands._simulations import cha_lines
 from qsa.curve import polygon_self_intersects
-from qsa.flows.paper_runs import resolution_check, run_cha, run_facet
-from qsa.flows.scenarios import CHAScenario, FacetScenario
 from qsa.io import load_npz
+from qsa.paper import (
+    CHAScenario,
+    FacetScenario,
+    coarsening_events,
+    resolution_check,
+    run_cha,
+    run_facet,
+    run_folding,
+)
 
 # a small CHA scenario (5 lobes, l* = 0.05) that N = 128 resolves: seconds, not minutes
 SMALL_CHA = CHAScenario(r0=0.3, lobes=5, N=128, l_star=0.05, t_final=1e-4, rho=1.3)
@@ -20,37 +28,12 @@ def chords(x, y):
     return np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
 
 
-def test_facet_initial_data_in_the_spinodal_range():
-    sc = FacetScenario()
-    x, y = sc.initial()
-    c = chords(x, y)
-    assert x.size == 600 and np.ptp(c) < 1e-10 * c.mean()
-    lo, hi = sc.spinodal_range()
-    assert lo < 1 / sc.R < hi
-    r = np.hypot(x, y)
-    assert np.max(np.abs(r / sc.R - 1)) < 20 * sc.noise
-
-
-def test_cha_initial_data_is_the_crenellated_curve():
-    sc = CHAScenario()
-    x, y = sc.initial()
-    r, th = np.hypot(x, y), np.arctan2(y, x)
-    expected = 0.6 * (1 + 0.4 * np.tanh(3 * np.cos(13 * th)) / math.tanh(3))
-    assert np.max(np.abs(r - expected)) < 1e-6
-    L = chords(x, y).sum()
-    assert L / sc.N < sc.l_star  # the kernel is resolved at the start
-    assert sc.rho * L / sc.N < sc.l_star  # ... and at the target length
-    assert not polygon_self_intersects(x, y)
-    assert sc.pair_separation() == pytest.approx(0.01 * math.sqrt(1.5))
-
-
 def test_facet_short_run_writes_outputs_and_resumes(tmp_path):
     sc = FacetScenario(t_final=3e-5)
     out = run_facet(sc, str(tmp_path), spinodal_time=1e-5, spinodal_step=2e-6,
                     progress=False, n_snapshots=5)
-    s = out.summary
-    assert s["success"] and s["t_reached"] == pytest.approx(3e-5)
-    E = out.arrays["energy"]
+    assert out.success and out.t_reached == pytest.approx(3e-5)
+    E = out.energy
     assert E[-1] < E[0] and np.all(np.diff(E) <= 1e-9 * E[0])
     # invariants of the DAE state: equal chords of length L/N, curvature from positions
     y = out.result.states[-1]
@@ -69,21 +52,21 @@ def test_facet_short_run_writes_outputs_and_resumes(tmp_path):
     n_before = arrays["t"].size
     more = run_facet(FacetScenario(t_final=4e-5), str(tmp_path), resume=True,
                      spinodal_time=1e-5, progress=False, n_snapshots=5)
-    t = more.arrays["t"]
-    assert more.summary["t_reached"] == pytest.approx(4e-5)
+    t = more.t
+    assert more.t_reached == pytest.approx(4e-5)
     assert t.size > n_before and np.all(np.diff(t) > 0)
 
 
 def test_cha_short_run_monitors_and_writes(tmp_path):
     out = run_cha(SMALL_CHA, str(tmp_path), progress=False, snapshot_times=[5e-5, 1e-4])
-    s = out.summary
-    assert s["success"]
-    E = out.arrays["energy"]
+    assert out.success
+    E = out.energy
     assert E[-1] < E[0]
-    assert s["self_intersection"]["detected"] is False
-    assert out.arrays["approach"].size == out.arrays["t"].size
-    assert s["separation_target"] == pytest.approx(0.05 * math.sqrt(1.5))
-    name = s["scenario"]
+    assert out.self_intersection.detected is False
+    assert out.approach.size == out.t.size
+    assert out.separation_target == pytest.approx(0.05 * math.sqrt(1.5))
+    name = out.name
+    assert out.summary()["scenario"] == name
     assert name == "cha_rho1.3_lstar0.05"  # another l* than Table T1's: its own files
     for suffix in (".npz", ".json", "_checkpoint.npz", "_series.npz"):
         assert (tmp_path / f"{name}{suffix}").is_file()
@@ -97,10 +80,11 @@ def test_cha_self_intersection_reported_where_and_kept_on_resume(tmp_path):
     # strong precompression without repulsion (A0 = 0): the buckling curve crosses itself
     sc = replace(SMALL_CHA, rho=2.0, A0=0.0)
     out = run_cha(sc, str(tmp_path), t_final=1e-3, progress=False)
-    si = out.summary["self_intersection"]
+    si = out.summary()["self_intersection"]
     assert si["detected"] and 0 < si["first_time"] <= si["last_time"] <= 1e-3
-    fc_x, fc_y = out.arrays["crossing_x"], out.arrays["crossing_y"]
-    assert float(out.arrays["crossing_t"]) == si["first_time"]
+    fc = out.first_crossing
+    fc_x, fc_y = fc.x, fc.y
+    assert fc.t == si["first_time"] == out.self_intersection.first_time
     assert polygon_self_intersects(fc_x, fc_y)
     # the reported points lie on the polygon at its first crossing, between non-neighbours
     pts = np.asarray(si["first_crossing_points"])
@@ -108,57 +92,37 @@ def test_cha_self_intersection_reported_where_and_kept_on_resume(tmp_path):
     d = np.min(np.hypot(fc_x[None, :] - pts[:, :1], fc_y[None, :] - pts[:, 1:]), axis=1)
     assert np.all(d <= chords(fc_x, fc_y).max())
     assert min(si["first_crossing_arc_gap"]) > 3 * chords(fc_x, fc_y).mean()
-    name = out.summary["scenario"]
+    name = out.name
     assert (tmp_path / f"{name}_crossing.npz").is_file()
-    from qsa.commands.reproduce_snowflake import cha_lines
+    arrays, _ = load_npz(tmp_path / f"{name}.npz")
+    assert float(arrays["crossing_t"]) == si["first_time"]
+    assert np.array_equal(arrays["crossing_x"], fc_x)
 
-    text = "\n".join(cha_lines(out.summary))
+    text = "\n".join(cha_lines(out))
     x0, y0 = pts[0]
     assert "DETECTED" in text and f"first at {len(pts)} points, ({x0:.3g}, {y0:.3g})" in text
     # resuming past the crossing keeps where it happened
     more = run_cha(sc, str(tmp_path), t_final=1.5e-3, resume=True, progress=False)
-    assert more.summary["self_intersection"]["first_time"] == si["first_time"]
-    assert more.summary["self_intersection"]["first_crossing_points"] == si[
+    assert more.self_intersection.first_time == si["first_time"]
+    assert more.summary()["self_intersection"]["first_crossing_points"] == si[
         "first_crossing_points"]
-    assert np.array_equal(more.arrays["crossing_x"], fc_x)
+    assert np.array_equal(more.first_crossing.x, fc_x)
     # the f:fold figure shows the crossing in the short-time column
     from qsa.plotting.simulations import folding_figure
 
-    fig = folding_figure([(more.arrays, more.summary)])
+    fig = folding_figure([more])
     titles = [ax.get_title() for ax in fig.axes]
     assert "crossing" in titles[0] and "crossing" not in titles[1]
     assert all(float(t.split("t=")[1].split()[0]) <= 1.5e-3 for t in titles[:3])
 
 
-def test_fold_balance_against_the_discrete_adhesion_energy():
-    from qsa.energies.adhesion import AdhesionKernel, adhesion_energy
-
-    sc = CHAScenario(l_star=0.05, a=1.3, A0=7.0)
-    fb = sc.fold_balance()
-    # two straight strands of length 4, spacing h << l*: paired at d minus far apart
-    h, n = 0.005, 800
-    s = h * np.arange(n)
-    d = sc.pair_separation()
-    kernel = AdhesionKernel(sc.A0, sc.l_star, sc.a)
-
-    def energy(gap):
-        return adhesion_energy(kernel, np.r_[s, s], np.r_[np.zeros(n), np.full(n, gap)], h,
-                               method="dense")
-
-    gain = (energy(50 * sc.l_star) - energy(d)) / (n * h)
-    # the strand ends lose O(l* / length) of the overlap
-    assert gain == pytest.approx(fb["pair_gain_per_length"], rel=0.03)
-    assert fb["hairpin_energy"] == pytest.approx(np.pi * sc.eps / d)
-    assert CHAScenario().fold_balance()["fold_length"] == pytest.approx(64.9, abs=0.1)
-    assert CHAScenario(l_star=0.1).fold_balance()["fold_length"] == pytest.approx(0.649, abs=1e-3)
-
-
 def test_resolution_check_compares_common_nodes():
     sc = CHAScenario(r0=0.3, lobes=5, N=64, l_star=0.08)
     rc = resolution_check(sc, t_short=1e-4, progress=False)
-    assert rc["success"] == [True, True] and rc["steps"][0] > 1
+    assert rc.success == (True, True) and rc.steps[0] > 1
     # second order in space: N = 64 vs 128 differ by a fraction of l*, far below the size
-    assert 0 < rc["max_difference"] < 0.2 * sc.l_star
+    assert 0 < rc.max_difference < 0.2 * sc.l_star
+    assert rc.summary()["max_difference_over_l_star"] == rc.max_difference / sc.l_star
 
 
 def test_cli_facet_and_snowflake_registered():
@@ -178,10 +142,9 @@ def test_cli_facet_and_snowflake_registered():
 @pytest.mark.slow
 def test_facet_full(tmp_path):
     out = run_facet(FacetScenario(), str(tmp_path), progress=False)
-    s = out.summary
-    assert s["peak_fronts"] >= 16 and s["final_fronts"] == 6
-    assert s["final_rotation_defect"] < 1e-3
-    assert s["energy_max_increase"] < 1e-6 * s["final_energy"]
+    assert out.coarsening.peak >= 16 and out.final.fronts == 6
+    assert out.final.rotation_defect < 1e-3
+    assert out.energy_max_increase < 1e-6 * out.final_energy
 
 
 @pytest.mark.slow
@@ -193,14 +156,15 @@ def test_folding_full(tmp_path):
     contacts (0.17-0.19 long): median ratio 1.10, closest point 0.83 -- the
     parallel-strand theory does not describe them, so they are not asserted.
     """
-    runs = [run_cha(CHAScenario(rho=rho), str(tmp_path), progress=False).summary
-            for rho in (1.2, 1.3, 1.4)]
-    pairs = [s["n_sheet_pairs"] for s in runs]
-    assert all(s["success"] for s in runs)
-    assert all(s["energy_max_increase"] < 0 for s in runs)  # strictly decreasing
-    assert not any(s["self_intersection"]["detected"] for s in runs)
+    fold = run_folding([CHAScenario(rho=rho) for rho in (1.2, 1.3, 1.4)], str(tmp_path),
+                       progress=False)
+    runs, pairs = fold.runs, fold.n_sheet_pairs
+    assert fold.success
+    assert all(r.energy_max_increase < 0 for r in runs)  # strictly decreasing
+    assert not any(r.self_intersection.detected for r in runs)
     assert pairs == sorted(pairs) and pairs[-1] > pairs[0]  # more folds for larger rho
-    assert abs(runs[1]["separation_ratio"] - 1) < 0.1
+    assert fold.more_folds_for_larger_rho
+    assert abs(runs[1].separation_ratio - 1) < 0.1
 
 
 @pytest.mark.slow
@@ -213,14 +177,14 @@ def test_folding_lstar01_full(tmp_path):
     self-intersection. Backward Euler with step doubling at tol 1e-4 lets the
     energy rise by at most 0.0016 (of ~53) on 21-33 late steps.
     """
-    runs = [run_cha(CHAScenario(rho=rho, l_star=0.1, N=600), str(tmp_path),
-                    progress=False).summary for rho in (1.2, 1.3, 1.4)]
-    pairs = [s["n_sheet_pairs"] for s in runs]
-    assert all(s["success"] for s in runs)
-    assert all(s["energy_max_increase"] < 1e-4 * s["energy_final"] for s in runs)
-    assert not any(s["self_intersection"]["detected"] for s in runs)
+    fold = run_folding([CHAScenario(rho=rho, l_star=0.1, N=600) for rho in (1.2, 1.3, 1.4)],
+                       str(tmp_path), progress=False)
+    runs, pairs = fold.runs, fold.n_sheet_pairs
+    assert fold.success
+    assert all(r.energy_max_increase < 1e-4 * r.energy_final for r in runs)
+    assert not any(r.self_intersection.detected for r in runs)
     assert min(pairs) >= 8 and pairs[-1] > pairs[0]  # many folds, more for larger rho
-    assert all(abs(s["separation_ratio"] - 1) < 0.1 for s in runs)
+    assert all(abs(r.separation_ratio - 1) < 0.1 for r in runs)
 
 
 @pytest.mark.slow
@@ -234,9 +198,9 @@ def test_folding_lstar01_rho16_crosses_where_the_necks_meet():
     """
     out = run_cha(CHAScenario(rho=1.6, l_star=0.1, N=1200), None, t_final=2.2e-3,
                   progress=False)
-    si = out.summary["self_intersection"]
-    assert si["detected"] and 1e-3 < si["first_time"] < 2.2e-3
-    pts = np.asarray(si["first_crossing_points"])
+    si = out.self_intersection
+    assert si.detected and 1e-3 < si.first_time < 2.2e-3
+    pts = si.first_crossing.points
     r = np.hypot(pts[:, 0], pts[:, 1])
     assert np.all(r < 0.35) and pts.shape[0] >= 13
 
@@ -252,3 +216,13 @@ def test_cli_reproduce_facet_short(tmp_path, capsys):
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert (tmp_path / "o" / "facet_energy.png").is_file()
     assert (tmp_path / "o" / "facet_fronts.png").is_file()
+
+
+def test_coarsening_events_ignore_flicker():
+    t = np.arange(9.0)
+    counts = [0, 6, 18, 16, 18, 14, 16, 8, 6]
+    peak, t_peak, events = coarsening_events(t, counts)
+    assert (peak, t_peak) == (18, 2.0)
+    assert events == [(3.0, 18, 16), (5.0, 16, 14), (7.0, 14, 8), (8.0, 8, 6)]
+    assert [e.before for e in events] == [18, 16, 14, 8]
+    assert coarsening_events([], []).events == []

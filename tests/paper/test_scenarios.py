@@ -1,0 +1,125 @@
+"""The paper's scenarios: their parameters are the published ones and their data is right."""
+
+import math
+
+import numpy as np
+import pytest
+
+from qsa.curve import polygon_self_intersects
+from qsa.flows import CHA
+from qsa.paper import (
+    CONVERGENCE,
+    SCENARIOS,
+    CHAScenario,
+    ConvergenceScenario,
+    FacetScenario,
+    Scenario,
+    front_scenario,
+    scenario_splice,
+)
+
+
+def chords(x, y):
+    return np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
+
+
+def test_facet_initial_data_in_the_spinodal_range():
+    sc = FacetScenario()
+    x, y = sc.initial()
+    c = chords(x, y)
+    assert x.size == 600 and np.ptp(c) < 1e-10 * c.mean()
+    lo, hi = sc.spinodal_range()
+    assert lo < 1 / sc.R < hi
+    r = np.hypot(x, y)
+    assert np.max(np.abs(r / sc.R - 1)) < 20 * sc.noise
+
+
+def test_cha_initial_data_is_the_crenellated_curve():
+    sc = CHAScenario()
+    x, y = sc.initial()
+    r, th = np.hypot(x, y), np.arctan2(y, x)
+    expected = 0.6 * (1 + 0.4 * np.tanh(3 * np.cos(13 * th)) / math.tanh(3))
+    assert np.max(np.abs(r - expected)) < 1e-6
+    L = chords(x, y).sum()
+    assert L / sc.N < sc.l_star  # the kernel is resolved at the start
+    assert sc.rho * L / sc.N < sc.l_star  # ... and at the target length
+    assert not polygon_self_intersects(x, y)
+    assert sc.pair_separation() == pytest.approx(0.01 * math.sqrt(1.5))
+
+
+def test_fold_balance_against_the_discrete_adhesion_energy():
+    from qsa.energies.adhesion import AdhesionKernel, adhesion_energy
+
+    sc = CHAScenario(l_star=0.05, a=1.3, A0=7.0)
+    fb = sc.fold_balance()
+    # two straight strands of length 4, spacing h << l*: paired at d minus far apart
+    h, n = 0.005, 800
+    s = h * np.arange(n)
+    d = sc.pair_separation()
+    kernel = AdhesionKernel(sc.A0, sc.l_star, sc.a)
+
+    def energy(gap):
+        return adhesion_energy(kernel, np.r_[s, s], np.r_[np.zeros(n), np.full(n, gap)], h,
+                               method="dense")
+
+    gain = (energy(50 * sc.l_star) - energy(d)) / (n * h)
+    # the strand ends lose O(l* / length) of the overlap
+    assert gain == pytest.approx(fb.pair_gain_per_length, rel=0.03)
+    assert fb.hairpin_energy == pytest.approx(np.pi * sc.eps / d)
+    assert fb.fold_length == fb.hairpin_energy / fb.pair_gain_per_length
+    assert CHAScenario().fold_balance().fold_length == pytest.approx(64.9, abs=0.1)
+    assert CHAScenario(l_star=0.1).fold_balance().fold_length == pytest.approx(0.649, abs=1e-3)
+
+
+def test_convergence_scenario_is_the_appendix_example():
+    sc = CONVERGENCE
+    assert sc == ConvergenceScenario()
+    # the appendix: eps = 0.1, beta = 1, rho = 1.5, A0 = 10, l* = 1/2, a = 1 to t = 0.2
+    assert sc.model_params() == dict(eps=0.1, beta=1.0, rho=1.5, A0=10.0, l_star=0.5, a=1.0)
+    assert (sc.t_final, sc.tol) == (0.2, 1e-4)
+    model = sc.model("centred")
+    assert isinstance(model, CHA) and model.force_normal == "centred"
+    assert sc.model().force_normal == "unit"
+    x, y = sc.samples(1000)
+    th = 2 * np.pi * np.arange(1000) / 1000
+    r = 1 + 0.35 * np.cos(3 * th)
+    assert np.array_equal(x, r * np.cos(th) + 0.05 * np.sin(4 * th))
+    assert np.array_equal(y, r * np.sin(th))
+    assert sc.samples()[0].size == 4000
+    # Table ap:t1 and the step counts; second order: ratios near 4
+    d = sc.paper_differences
+    assert d[50] == 0.1909 and sorted(d) == [50, 100, 200, 400]
+    assert all(3.5 < d[n] / d[2 * n] < 5 for n in (100, 200))
+    assert sc.paper_steps[1e-3] == 65 and len(sc.paper_steps) == 4
+
+
+def test_front_scenarios_carry_their_parameters():
+    tri = SCENARIOS["triangle"]
+    assert (tri.alpha, tri.kstar, tri.beta) == (0.1, 5.0, 5.0)
+    assert sum(tri.angles) == 360 and sum(SCENARIOS["short-facet"].angles) == 360
+    assert front_scenario("triangle") is tri
+    changed = front_scenario(tri, alpha=0.2, kstar=None)
+    assert (changed.alpha, changed.kstar) == (0.2, 5.0) and changed.facets == tri.facets
+    with pytest.raises(ValueError, match="scenario"):
+        front_scenario("hexagon")
+    with pytest.raises(ValueError, match="scenario"):
+        front_scenario(3)
+    with pytest.raises(ValueError, match="n_corners"):
+        Scenario.regular(1, 0.3)
+
+
+def test_scenario_splice_closes_the_polygon():
+    eq = scenario_splice("short-facet")
+    p = np.asarray(eq.params["positions"])
+    sc = SCENARIOS["short-facet"]
+    assert p.size == 2 * len(sc.angles) and eq.closure < 1e-10
+    # each corner turns by its angle: kstar times the corner's arc length
+    turn = sc.kstar * (p[1::2] - p[0::2])
+    assert np.allclose(np.rad2deg(turn), sc.angles, atol=1e-8)
+    # overrides of alpha / kstar are passed on, as by the scenario itself
+    a = scenario_splice(sc, 0.12)
+    b = front_scenario(sc, alpha=0.12).splice()
+    assert np.array_equal(a.params["positions"], b.params["positions"])
+    sq = Scenario.regular(4, 0.35).splice()
+    gaps = np.diff(np.append(sq.params["positions"], sq.params["positions"][0] + sq.params["L"]))
+    assert np.allclose(gaps[1::2], gaps[1], rtol=1e-8)  # equal facets
