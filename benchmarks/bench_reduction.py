@@ -11,7 +11,10 @@ when numba is installed: ``pip install qsa[fast]``). Prints CPU seconds
 (``time.process_time``, best of 5 ODE runs after a warm-up run that also compiles or
 loads the numba kernel, robust on a shared machine),
 DAE steps / ODE right-hand-side evaluations (with those of the Jacobian), the
-speedup against the DAE at each N and the collision times. The DAE collision time
+speedup against the DAE at each N and the collision times; first, the cost of one
+evaluation of the right-hand side alone (``FrontODE.velocity`` at the scenario's splice,
+best of many) per backend, fixed and variable length, with and without the Newton
+correction. The DAE collision time
 converges like N^-2 (second-order differences), so the DAE needs N ~ 2400 to be within
 ~0.3% of its limit; the ODE has no such cost.
 
@@ -59,7 +62,34 @@ def ode_cpu(scenario, correction=None, variable=False, backend="numpy", repeat=5
     return best, r.nfev, tc
 
 
+def eval_us(scenario, correction=None, variable=False, backend="numpy", number=200):
+    """Best-of-5 wall time of one right-hand-side evaluation (microseconds)."""
+    sc = SCENARIOS[scenario]
+    eq = sc.splice()
+    p, L = np.array(eq.params["positions"]), eq.params["L"]
+    cut = tuple(eq.params["cutoff"])
+    ode = FrontODE(sc.alpha, sc.kstar, L, correction=correction,
+                   beta=sc.beta if variable else None, backend=backend)
+    y = np.append(p, L) if variable else p
+    ode.rhs(y, cut)  # warm-up (compiles or loads the numba kernel)
+    best = np.inf
+    for _ in range(5):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            ode.rhs(y, cut)
+        best = min(best, (time.perf_counter() - t0) / number)
+    return 1e6 * best, ode.grid.N
+
+
 def main(Ns):
+    print("one right-hand-side evaluation (us, best of 5 x 200), M quadrature nodes")
+    print(f"  {'scenario':12s} {'M':>5s} {'backend':>7s} " + " ".join(
+        f"{(c or 'none') + (', var L' if v else ', fixed'):>16s}" for c, v in VARIANTS))
+    for name in SCENARIOS:
+        for backend in backends():
+            cells = [eval_us(name, c, v, backend) for c, v in VARIANTS]
+            print(f"  {name:12s} {cells[0][1]:5d} {backend:>7s} "
+                  + " ".join(f"{us:16.1f}" for us, _ in cells))
     for name in SCENARIOS:
         dae = {}
         print(f"{name}: DAE (beta = 5)")
@@ -70,15 +100,16 @@ def main(Ns):
             print(f"  {N:5d} {c.time_dae:7.2f} {c.n_steps_dae:6d} {c.collision_dae:9.5f}")
         head = "".join(f" {'x DAE ' + str(N):>11s}" for N in Ns)
         diff = "".join(f" {'%/' + str(N):>7s}" for N in Ns)
-        print(f"  {'reduction':22s} {'backend':>7s} {'cpu s':>7s} {'nfev':>5s}{head} "
-              f"{'t_c':>10s}{diff}")
+        print(f"  {'reduction':22s} {'backend':>7s} {'cpu s':>7s} {'nfev':>5s} {'us/nfev':>7s}"
+              f"{head} {'t_c':>10s}{diff}")
         for correction, variable in VARIANTS:
             for backend in backends():
                 cpu, nfev, tc = ode_cpu(name, correction, variable, backend)
                 label = f"{correction or 'none'}, {'variable' if variable else 'fixed'} L"
                 sp = "".join(f" {dae[N][0] / cpu:11.0f}" for N in Ns)
                 rel = "".join(f" {100 * (tc / dae[N][1] - 1):+7.2f}" for N in Ns)
-                print(f"  {label:22s} {backend:>7s} {cpu:7.4f} {nfev:5d}{sp} {tc:10.7f}{rel}")
+                print(f"  {label:22s} {backend:>7s} {cpu:7.4f} {nfev:5d} {1e6 * cpu / nfev:7.0f}"
+                      f"{sp} {tc:10.7f}{rel}")
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ from qsa import FiniteDifference
 from qsa.flows import FacetingFlow, solve_flow
 from qsa.paper import SCENARIOS, scenario_splice
 from qsa.reduction.fronts import detect_fronts, track_flow
+from qsa.reduction.manifold import closure, energy, energy_gradient
 from qsa.reduction.ode import FrontODE
 
 
@@ -84,11 +85,11 @@ def _spectral_derivs(f, length):
 
 def projected_velocity(ode, p, cut, R):
     """Saddle-point solve of the reduced flow with the force ``int R dpsi/dp_j``."""
-    f = ode._fields(p, cut)
-    phi = ode._normal(f)
-    G = phi.T @ (f["w"][:, None] * phi)
-    dE = (R * f["w"]) @ f["dpsi"]
-    _, J = ode._constraints(f)
+    f = ode.fields(p, cut)
+    phi, w = ode.normal_velocities(p, cut)
+    G = phi.T @ (w[:, None] * phi)
+    dE = energy_gradient(f, ode.front.alpha, ode.front.well, R)
+    _, J = closure(f)
     n = p.size
     A = np.vstack([J, np.ones((1, n)) / np.sqrt(n)])
     K = np.block([[G, A.T], [A, np.zeros((4, 4))]])
@@ -161,11 +162,11 @@ def diagnose(scenario="short-facet", N=1200, beta=5.0, alpha=0.1, kstar=5.0,
         vRc = (_aligned_crossings(ode, p + h * vR, cut)
                - _aligned_crossings(ode, p - h * vR, cut)) / (2 * h)
         rate_r = vRc[j2] - vRc[g]
-        f = ode._fields(p, cut)
-        w = f["w"]
+        f = ode.fields(p, cut)
+        w = f.weights
         E_d = float((0.5 * alpha**2 * d1**2 + W.W(kd)) @ w)
-        E_s = ode._energy(f)
-        dk = kd - f["psi"]
+        E_s = energy(f, alpha, W)
+        dk = kd - f.psi
         dist = np.abs(_wrap(s[:, None] - c[None, :], L))
         near = dist < lam_w
         near_gap = near[:, [g, j2]].any(axis=1)
@@ -189,7 +190,7 @@ def diagnose(scenario="short-facet", N=1200, beta=5.0, alpha=0.1, kstar=5.0,
         for j in range(nf):  # centre fifth of every gap: DAE kappa and splice psi
             a = _wrap(s - c[j], L) % L
             m = (a > 0.4 * gaps[j]) & (a < 0.6 * gaps[j])
-            mids.append((float(np.mean(kd[m])), float(np.mean(f["psi"][m])),
+            mids.append((float(np.mean(kd[m])), float(np.mean(f.psi[m])),
                          float(np.mean(delta[m]))))
         eps_f = rate_o / rate_d - 1
         tail = mids[g][1] / kstar

@@ -5,6 +5,12 @@ thin dense factors. Finite-difference Hessians are sparse except for the
 perimeter penalty's rank-one term ``(beta / g) int g1 ds``; keeping that term
 factored keeps memory and matrix-vector products O(N) at N = 10^6.
 
+``ReducedHessian`` represents the Hessian of a function ``E(U) = E^(Y(U), U)``
+whose state ``Y`` is defined implicitly by sparse equations ``c(Y, U) = 0``
+(e.g. positions obtained by cumulative integration): dense as a matrix, exact
+and O(nnz) in factored form, with shift-invert solves through one sparse
+saddle-point system.
+
 :func:`factorize` is the one LU factorization of the package: dense (LAPACK),
 sparse (SuperLU) or either with a thin dense border, solved by block elimination.
 """
@@ -16,7 +22,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["SparsePlusLowRank", "to_dense", "is_matrix_like", "factorize", "Factorization"]
+__all__ = ["SparsePlusLowRank", "ReducedHessian", "to_dense", "is_matrix_like", "factorize",
+           "Factorization"]
 
 
 class SparsePlusLowRank:
@@ -77,6 +84,8 @@ class SparsePlusLowRank:
                                    matmat=self.__matmul__, dtype=float)
 
     def __matmul__(self, other):
+        if isinstance(other, ReducedHessian):
+            return NotImplemented
         if isinstance(other, SparsePlusLowRank):
             # (S + U V^T)(S2 + U2 V2^T) = S S2 + [U, (S + U V^T) U2] [S2^T V, V2]^T
             left = np.hstack([self.U, self @ other.U])
@@ -94,6 +103,8 @@ class SparsePlusLowRank:
         return other @ self.S + (other @ self.U) @ self.V.T
 
     def __add__(self, other):
+        if isinstance(other, ReducedHessian):
+            return NotImplemented
         if isinstance(other, SparsePlusLowRank):
             return SparsePlusLowRank(self.S + other.S, np.hstack([self.U, other.U]),
                                      np.hstack([self.V, other.V]))
@@ -125,6 +136,344 @@ class SparsePlusLowRank:
         return f"SparsePlusLowRank(shape={self.shape}, nnz={self.S.nnz}, rank={self.rank})"
 
 
+class ReducedHessian:
+    """``H = S0 + Lf K Rf + U V^T`` with ``K`` the reduced Hessian of an implicit state.
+
+    ``K = Luu + Lyu^T Z + Z^T Lyu + Z^T Lyy Z``, ``Z = dY/dU = -cY^{-1} cU``, is the
+    Hessian of ``E(U) = E^(Y(U), U)`` when the state ``Y(U)`` solves ``c(Y, U) = 0``:
+    ``Luu, Lyu, Lyy`` are the second derivatives of the Lagrangian
+    ``E^ + lambda . c`` at the adjoint multipliers (``d/dY = 0``) and ``cY, cU`` the
+    constraint Jacobians. ``K`` is dense when ``cY^{-1}`` is (a cumulative sum), yet
+    every factor is sparse: storage and products cost O(nnz), and ``(H - sigma B) x = b``
+    is one sparse saddle-point solve (:meth:`shift_invert`).
+
+    Parameters
+    ----------
+    Luu : sparse matrix, shape (p, p)
+        Symmetric.
+    Lyu : sparse matrix, shape (m, p)
+    Lyy : sparse matrix, shape (m, m)
+        Symmetric.
+    cY : sparse matrix, shape (m, m)
+        Invertible; a lower-triangular one is factored without fill.
+    cU : sparse matrix, shape (m, p)
+    left : sparse matrix, shape (n, p), optional
+        ``Lf`` (default the identity).
+    right : sparse matrix, shape (p, k), optional
+        ``Rf`` (default the identity).
+    S : sparse matrix, shape (n, k), optional
+        ``S0`` (default zero).
+    U, V : array_like, shape (n, r) and (k, r), optional
+        Low-rank term (default none).
+
+    Notes
+    -----
+    Sums with sparse, :class:`SparsePlusLowRank` and other ``ReducedHessian``
+    matrices, products with sparse matrices on either side, scalar multiples and
+    ``.T`` stay in this form; sums with dense arrays become dense.
+
+    Examples
+    --------
+    ``E(u) = sum_i y_i(u)^2 / 2`` with ``y = C u`` the cumulative sum
+    (``c(y, u) = Bd y - u``, ``Bd`` the bidiagonal difference): ``H = C^T C``.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> n = 5
+    >>> Bd = sp.eye(n) - sp.eye(n, k=-1)
+    >>> H = ReducedHessian(sp.csr_matrix((n, n)), sp.csr_matrix((n, n)), sp.eye(n),
+    ...                    Bd, -sp.eye(n))
+    >>> C = np.tril(np.ones((n, n)))
+    >>> bool(np.allclose(H.toarray(), C.T @ C))
+    True
+    >>> b = np.arange(1.0, n + 1)
+    >>> bool(np.allclose(H @ (H.shift_invert(0.5) @ b) - 0.5 * (H.shift_invert(0.5) @ b), b))
+    True
+    """
+
+    __array_ufunc__ = None  # make ndarray @ self and ndarray + self defer to this class
+
+    def __init__(self, Luu, Lyu, Lyy, cY, cU, left=None, right=None, S=None, U=None, V=None):
+        self.Luu, self.Lyu, self.Lyy = sp.csr_matrix(Luu), sp.csr_matrix(Lyu), sp.csr_matrix(Lyy)
+        self.cY, self.cU = sp.csr_matrix(cY), sp.csr_matrix(cU)
+        p, m = self.Luu.shape[0], self.cY.shape[0]
+        if (self.Luu.shape != (p, p) or self.Lyu.shape != (m, p) or self.Lyy.shape != (m, m)
+                or self.cY.shape != (m, m) or self.cU.shape != (m, p)):
+            raise ValueError("ReducedHessian: need Luu (p, p), Lyu (m, p), Lyy (m, m), "
+                             "cY (m, m), cU (m, p)")
+        self.left = sp.identity(p, format="csr") if left is None else sp.csr_matrix(left)
+        self.right = sp.identity(p, format="csr") if right is None else sp.csr_matrix(right)
+        if self.left.shape[1] != p or self.right.shape[0] != p:
+            raise ValueError(f"ReducedHessian: left must have {p} columns and right {p} rows")
+        n, k = self.left.shape[0], self.right.shape[1]
+        self.S = sp.csr_matrix((n, k)) if S is None else sp.csr_matrix(S)
+        if self.S.shape != (n, k):
+            raise ValueError(f"ReducedHessian: S must have shape {(n, k)}, got {self.S.shape}")
+        U = np.zeros((n, 0)) if U is None else np.asarray(U, dtype=float).reshape(n, -1)
+        V = np.zeros((k, 0)) if V is None else np.asarray(V, dtype=float).reshape(k, -1)
+        if U.shape[1] != V.shape[1]:
+            raise ValueError("ReducedHessian: U and V must have the same number of columns")
+        self.U, self.V = U, V
+        self._lu = None
+
+    # ----------------------------------------------------------------- shape
+    @property
+    def shape(self):
+        """``(n, k)``."""
+        return (self.left.shape[0], self.right.shape[1])
+
+    @property
+    def nnz(self):
+        """Stored nonzeros of all sparse factors (the memory is O(nnz + (n + k) r))."""
+        return sum(A.nnz for A in (self.Luu, self.Lyu, self.Lyy, self.cY, self.cU,
+                                   self.left, self.right, self.S))
+
+    @property
+    def nbytes(self):
+        """Bytes held by the sparse factors and the low-rank columns."""
+        total = self.U.nbytes + self.V.nbytes
+        for A in (self.Luu, self.Lyu, self.Lyy, self.cY, self.cU, self.left, self.right, self.S):
+            total += A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
+        return total
+
+    def _with(self, **changes):
+        args = dict(Luu=self.Luu, Lyu=self.Lyu, Lyy=self.Lyy, cY=self.cY, cU=self.cU,
+                    left=self.left, right=self.right, S=self.S, U=self.U, V=self.V)
+        args.update(changes)
+        out = ReducedHessian(**args)
+        if "cY" not in changes:
+            out._lu = self._lu  # same cY: share its factorization
+        return out
+
+    # -------------------------------------------------------------- products
+    def _solve_cY(self, b, trans="N"):
+        if self._lu is None:
+            cY = self.cY.tocsc()
+            if sp.triu(cY, 1).nnz == 0:  # lower triangular: natural order, no fill
+                self._lu = spla.splu(cY, permc_spec="NATURAL", diag_pivot_thresh=0.0)
+            else:
+                self._lu = spla.splu(cY)
+        return self._lu.solve(np.asarray(b, dtype=float), trans=trans)
+
+    def core_matvec(self, u):
+        """``K u`` for the reduced Hessian ``K`` alone, ``u`` shape (p,) or (p, j)."""
+        u = np.asarray(u, dtype=float)
+        z = -self._solve_cY(self.cU @ u)                         # Z u
+        t = self.Luu @ u + self.Lyu.T @ z
+        return t - self.cU.T @ self._solve_cY(self.Lyu @ u + self.Lyy @ z, trans="T")
+
+    def __matmul__(self, other):
+        if isinstance(other, ReducedHessian):
+            return NotImplemented
+        if isinstance(other, SparsePlusLowRank):
+            return (self @ other.S) + SparsePlusLowRank(sp.csr_matrix((self.shape[0],
+                                                                       other.shape[1])),
+                                                        self @ other.U, other.V)
+        if sp.issparse(other):
+            return self._with(right=self.right @ other, S=self.S @ other,
+                              V=np.asarray(other.T @ self.V))
+        x = np.asarray(other, dtype=float)
+        out = self.S @ x + self.left @ self.core_matvec(self.right @ x)
+        if self.U.shape[1]:
+            out = out + self.U @ (self.V.T @ x)
+        return out
+
+    def __rmatmul__(self, other):
+        if isinstance(other, SparsePlusLowRank):
+            low = SparsePlusLowRank(sp.csr_matrix((other.shape[0], self.shape[1])), other.U,
+                                    self.T @ other.V)
+            return (other.S @ self) + low
+        if sp.issparse(other):
+            return self._with(left=other @ self.left, S=other @ self.S,
+                              U=np.asarray(other @ self.U))
+        return (self.T @ np.asarray(other, dtype=float).T).T
+
+    @property
+    def T(self):
+        """Transpose (``K`` is symmetric): again a :class:`ReducedHessian`."""
+        return self._with(left=self.right.T, right=self.left.T, S=self.S.T, U=self.V, V=self.U)
+
+    def toarray(self, block=256):
+        """Dense ``ndarray`` of shape ``(n, k)``, built ``block`` columns at a time.
+
+        O(n k) memory and ``k`` products; meant for moderate sizes and checks.
+        """
+        n, k = self.shape
+        out = np.empty((n, k))
+        for start in range(0, k, block):
+            stop = min(k, start + block)
+            E = np.zeros((k, stop - start))
+            E[np.arange(start, stop), np.arange(stop - start)] = 1.0
+            out[:, start:stop] = self @ E
+        return out
+
+    def aslinearoperator(self):
+        """``scipy.sparse.linalg.LinearOperator`` with O(nnz) products."""
+        return spla.LinearOperator(self.shape, matvec=self.__matmul__, rmatvec=self.T.__matmul__,
+                                   matmat=self.__matmul__, dtype=float)
+
+    # ------------------------------------------------------------ solutions
+    def _scalings(self):
+        """``(l, r)`` when ``Lf = diag(l)``, ``Rf = diag(r)`` are invertible diagonals, else None."""
+        out = []
+        for A in (self.left, self.right):
+            if A.shape[0] != A.shape[1] or sp.triu(A, 1).nnz or sp.tril(A, -1).nnz:
+                return None
+            dvec = A.diagonal()
+            if np.any(dvec == 0):
+                return None
+            out.append(dvec)
+        return tuple(out)
+
+    def augmented(self, sigma=0.0, mass=None):
+        """The sparse saddle-point matrix of ``(H - sigma B - U V^T) x = b``.
+
+        With invertible diagonal ``Lf = diag(l)``, ``Rf = diag(r)`` (the energies'
+        case) the unknowns are ``[r x, y, mu]`` (sizes p, m, m), the right-hand side
+        ``[b / l, 0, 0]`` and the matrix
+
+            [[diag(1/l) (S0 - sigma B) diag(1/r) + Luu, Lyu^T, cU^T],
+             [Lyu, Lyy, cY^T],
+             [cU, cY, 0]];
+
+        eliminating ``mu`` and ``y = Z (r x)`` leaves ``diag(1/l) (H - sigma B - U V^T) x``.
+        Otherwise the unknowns are ``[x, u, y, mu, v]`` (sizes n, p, m, m, p) and the rows
+
+            (S0 - sigma B) x + Lf v = b,       Rf x - u = 0,
+            Luu u + Lyu^T y + cU^T mu - v = 0, Lyu u + Lyy y + cY^T mu = 0,
+            cU u + cY y = 0,
+
+        so that ``y = Z u``, ``v = K u`` and ``(S0 - sigma B + Lf K Rf) x = b``.
+
+        Parameters
+        ----------
+        sigma : float
+        mass : sparse matrix, shape (n, n), optional
+            ``B`` (default the identity).
+
+        Returns
+        -------
+        scipy.sparse.csc_matrix
+            Square, of size ``p + 2m`` (diagonal scalings) or ``n + 2p + 2m``.
+        """
+        n, k = self.shape
+        if n != k:
+            raise ValueError(f"augmented: the matrix must be square, got shape {self.shape}")
+        B = sp.identity(n, format="csr") if mass is None else sp.csr_matrix(mass)
+        if B.shape != (n, n):
+            raise ValueError(f"mass must have shape {(n, n)}, got {B.shape}")
+        p = self.Luu.shape[0]
+        scal = self._scalings()
+        if scal is not None:
+            lv, rv = scal
+            top = sp.diags(1.0 / lv) @ (self.S - sigma * B) @ sp.diags(1.0 / rv) + self.Luu
+            blocks = [[top, self.Lyu.T, self.cU.T],
+                      [self.Lyu, self.Lyy, self.cY.T],
+                      [self.cU, self.cY, None]]
+            return sp.bmat(blocks, format="csc")
+        Ip = sp.identity(p, format="csr")
+        blocks = [
+            [self.S - sigma * B, None, None, None, self.left],
+            [self.right, -Ip, None, None, None],
+            [None, self.Luu, self.Lyu.T, self.cU.T, -Ip],
+            [None, self.Lyu, self.Lyy, self.cY.T, None],
+            [None, self.cU, self.cY, None, None],
+        ]
+        return sp.bmat(blocks, format="csc")
+
+    def shift_invert(self, sigma=0.0, mass=None):
+        """``(H - sigma B)^{-1}`` as a ``LinearOperator`` (one sparse LU, then O(fill) solves).
+
+        The sparse part is factored through :meth:`augmented`; the low-rank term by the
+        Sherman-Morrison-Woodbury formula.
+
+        Parameters
+        ----------
+        sigma : float
+            Shift.
+        mass : sparse matrix, shape (n, n), optional
+            ``B`` (default the identity).
+
+        Returns
+        -------
+        scipy.sparse.linalg.LinearOperator, shape (n, n)
+
+        Raises
+        ------
+        ValueError
+            If ``H - sigma B`` is singular (the factorization fails).
+        """
+        n = self.shape[0]
+        try:
+            lu = spla.splu(self.augmented(sigma, mass))
+        except RuntimeError as err:
+            raise ValueError(f"sigma = {sigma}: H - sigma B is singular ({err})") from None
+        scal = self._scalings()
+
+        def solve0(b):
+            b = np.asarray(b, dtype=float)
+            rhs = np.zeros((lu.shape[0],) + b.shape[1:])
+            if scal is None:
+                rhs[:n] = b
+                return lu.solve(rhs)[:n]
+            lv, rv = (v.reshape((-1,) + (1,) * (b.ndim - 1)) for v in scal)
+            rhs[:n] = b / lv
+            return lu.solve(rhs)[:n] / rv
+
+        r = self.U.shape[1]
+        if r:
+            W = solve0(self.U)
+            cap = np.linalg.inv(np.eye(r) + self.V.T @ W)
+
+            def solve(b):
+                y = solve0(b)
+                return y - W @ (cap @ (self.V.T @ y))
+        else:
+            solve = solve0
+        return spla.LinearOperator((n, n), matvec=solve, matmat=solve, dtype=float)
+
+    # ------------------------------------------------------------- algebra
+    def __add__(self, other):
+        if isinstance(other, ReducedHessian):
+            if other.shape != self.shape:
+                raise ValueError(f"shapes {self.shape} and {other.shape} do not match")
+            bd = lambda a, b: sp.block_diag([a, b], format="csr")
+            return ReducedHessian(bd(self.Luu, other.Luu), bd(self.Lyu, other.Lyu),
+                                  bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
+                                  bd(self.cU, other.cU), sp.hstack([self.left, other.left]),
+                                  sp.vstack([self.right, other.right]), self.S + other.S,
+                                  np.hstack([self.U, other.U]), np.hstack([self.V, other.V]))
+        if isinstance(other, SparsePlusLowRank):
+            return self._with(S=self.S + other.S, U=np.hstack([self.U, other.U]),
+                              V=np.hstack([self.V, other.V]))
+        if sp.issparse(other):
+            return self._with(S=self.S + other)
+        if np.isscalar(other) and other == 0:
+            return self
+        return self.toarray() + np.asarray(other)
+
+    __radd__ = __add__
+
+    def __mul__(self, c):
+        if not np.isscalar(c):
+            return NotImplemented
+        return self._with(left=c * self.left, S=c * self.S, U=c * self.U)
+
+    __rmul__ = __mul__
+
+    def __neg__(self):
+        return self * -1.0
+
+    def __sub__(self, other):
+        return self + (-other)
+
+    def __rsub__(self, other):
+        return (-self) + other
+
+    def __repr__(self):
+        return (f"ReducedHessian(shape={self.shape}, state={self.cY.shape[0]}, nnz={self.nnz}, "
+                f"rank={self.U.shape[1]})")
+
+
 def to_dense(A) -> np.ndarray:
     """Dense ``ndarray`` copy of a dense, sparse or :class:`SparsePlusLowRank` matrix.
 
@@ -143,7 +492,7 @@ def to_dense(A) -> np.ndarray:
     >>> to_dense(sp.identity(2)).tolist()
     [[1.0, 0.0], [0.0, 1.0]]
     """
-    if isinstance(A, SparsePlusLowRank) or sp.issparse(A):
+    if isinstance(A, (SparsePlusLowRank, ReducedHessian)) or sp.issparse(A):
         return A.toarray()
     return np.array(A, dtype=float)
 
@@ -158,7 +507,8 @@ def is_matrix_like(A) -> bool:
     Returns
     -------
     bool
-        True for ``ndarray``, ``scipy.sparse`` matrices and :class:`SparsePlusLowRank`.
+        True for ``ndarray``, ``scipy.sparse`` matrices, :class:`SparsePlusLowRank` and
+        :class:`ReducedHessian`.
 
     Examples
     --------
@@ -166,7 +516,7 @@ def is_matrix_like(A) -> bool:
     >>> is_matrix_like(np.eye(2)), is_matrix_like(sp.eye(2)), is_matrix_like([[1.0]])
     (True, True, False)
     """
-    return isinstance(A, (np.ndarray, SparsePlusLowRank)) or sp.issparse(A)
+    return isinstance(A, (np.ndarray, SparsePlusLowRank, ReducedHessian)) or sp.issparse(A)
 
 
 class Factorization:

@@ -15,6 +15,15 @@ def trillium(N_or_grid, amp=0.2, lobes=3, kind=Fourier):
     return Curve.polar(lambda t: 1 + amp * np.cos(lobes * t), grid)
 
 
+def random_curve(seed, grid):
+    """A random smooth star-shaped closed curve (modes 2..5 of the radius, amplitude 0.08)."""
+    rng = np.random.default_rng(seed)
+    a = rng.normal(0, 0.08, 4)
+    b = rng.normal(0, 0.08, 4)
+    return Curve.polar(lambda t: 1 + sum(a[k] * np.cos((k + 2) * t) + b[k] * np.sin((k + 2) * t)
+                                         for k in range(4)), grid)
+
+
 def skew_curve(grid):
     """A smooth closed curve with no symmetry."""
     return Curve.polar(lambda t: 1 + 0.2 * np.cos(3 * t) + 0.1 * np.sin(2 * t + 0.3), grid)

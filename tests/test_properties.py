@@ -189,11 +189,20 @@ def test_W_invariance(ename, shape, dk, dg):
 
 @given(shape=shapes())
 def test_adhesion_intrinsic_gradient_maps_to_extrinsic(shape):
-    """M-dagger grad_I E = (A.n + kappa B, 0) (e:Adh-In_grad): W-invar for a two-point energy."""
-    c = make_curve(shape, Fourier(65))
-    E = all_energies(c.length())["adhesion"]
-    e = E.extrinsic_gradient(c)
-    assert np.abs(geometry.M_adjoint(c) @ E.gradient(c) - e).max() < 1e-9 * np.abs(e).max()
+    """M-dagger grad_I E = (A.n + kappa B, 0) (e:Adh-In_grad): W-invar for a two-point energy.
+
+    The gradient is the exact derivative of the discrete energy, so the identity holds
+    to the quadrature accuracy of the continuum one: spectral on Fourier grids (below
+    1e-9 from N = 129), second order on finite differences.
+    """
+    E = all_energies(1.0)["adhesion"]
+
+    def defect(c):
+        e = E.extrinsic_gradient(c)
+        return np.abs(geometry.M_adjoint(c) @ E.gradient(c) - e).max() / np.abs(e).max()
+
+    assert defect(make_curve(shape, Fourier(257))) < 1e-9
+    assert_second_order(defect, shape, floor=1e-10)
 
 
 def smooth_direction(grid, seed):

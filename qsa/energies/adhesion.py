@@ -51,6 +51,7 @@ from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
 from qsa._checks import real_number
+from qsa.energies.adhesion_hessian import AdhesionDerivatives, adhesion_derivatives
 from qsa.energies.base import Energy
 
 __all__ = [
@@ -750,10 +751,12 @@ class Adhesion(Energy):
     The node quadrature is ``dsigma_j = g_j / N`` in both integrals, diagonal
     included. Provided: ``energy``, ``fields`` (B and the force 𝔸),
     ``extrinsic_gradient`` ``(𝔸.n + kappa B, 0)`` (e:Adh-Ex_grad),
-    ``normal_velocity`` ``-(𝔸.n + kappa B)`` (e:Adh-NV), and ``gradient``, the
-    intrinsic gradient ``(M-dagger)^{-1}`` of the extrinsic one (e:Adh-In_grad),
-    taken as the least-squares solution orthogonal to span Psi (dense, O(N^3)).
-    The intrinsic Hessian of a two-point energy is nonlocal and is not provided.
+    ``normal_velocity`` ``-(𝔸.n + kappa B)`` (e:Adh-NV), and the exact derivatives
+    of the discrete energy as a function of ``U = (kappa, g)`` (positions
+    ``gamma0 + D tau``, base point and angle fixed; :mod:`qsa.energies.adhesion_hessian`):
+    ``gradient`` (an intrinsic gradient of e:Adh-In_grad, ``M-dagger nabla_I E =
+    (𝔸.n + kappa B, 0)``), ``hessian`` (dense, or factored on finite-difference
+    grids) and ``hessian_vector``, all O(N + pairs) except the dense Hessian.
 
     Examples
     --------
@@ -844,10 +847,26 @@ class Adhesion(Energy):
         """
         return -self.extrinsic_gradient(c)[: c.N]
 
-    def gradient(self, c) -> np.ndarray:
-        """Intrinsic gradient ``(M-dagger)^{-1} (𝔸.n + kappa B, 0)``, orthogonal to span Psi.
+    def derivatives(self, c) -> AdhesionDerivatives:
+        """Pair data and adjoint fields of the exact derivatives at ``c`` (reuse them).
 
-        Least squares in ``<f, h> = int f h dsigma`` (dense, O(N^3)).
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        AdhesionDerivatives
+            ``.gradient()``, ``.hessian(form)``, ``.hessian_vector(v)``.
+        """
+        x, y = c.positions()
+        return adhesion_derivatives(self.kernel, c, adhesion_pairs(self.kernel, x, y,
+                                                                   method=self.method))
+
+    def gradient(self, c) -> np.ndarray:
+        """``nabla_I E_A`` in ``<f, h> = int f h dsigma``: the exact derivative of the discrete energy.
+
+        ``d/d delta E_A(U + delta U1) = <nabla_I E_A, U1>`` for every ``U1`` (O(N + pairs)).
 
         Parameters
         ----------
@@ -861,23 +880,42 @@ class Adhesion(Energy):
         --------
         >>> import numpy as np
         >>> from qsa import Curve, Fourier, geometry
-        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(65))
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(129))
         >>> E = Adhesion(10.0, 0.5)
-        >>> back = geometry.M_adjoint(c) @ E.gradient(c)
+        >>> back = geometry.M_adjoint(c) @ E.gradient(c)   # e:Adh-In_grad, spectrally
         >>> bool(np.allclose(back, E.extrinsic_gradient(c), atol=1e-6))
         True
         """
-        from qsa import geometry
-        from qsa.linalg import to_dense
+        return self.derivatives(c).gradient()
 
-        e = self.extrinsic_gradient(c)
-        w = np.sqrt(np.concatenate([c.dsigma, c.dsigma]))
-        Md = to_dense(geometry.M_adjoint(c))
-        y, *_ = np.linalg.lstsq(w[:, None] * Md / w[None, :], w * e, rcond=1e-10)
-        return y / w
+    def hessian(self, c, form="auto"):
+        """``nabla_I^2 E_A`` in ``<f, h> = int f h dsigma``: exact, dsigma-self-adjoint.
 
-    def hessian(self, c):
-        """Not provided: raises ``NotImplementedError`` (the Hessian is nonlocal)."""
-        raise NotImplementedError(
-            "the intrinsic Hessian of a two-point energy is nonlocal and not provided; "
-            "use extrinsic_gradient / normal_velocity, or the flow models' Jacobians")
+        Parameters
+        ----------
+        c : Curve
+        form : {"auto", "dense", "reduced"}
+            See :meth:`AdhesionDerivatives.hessian
+            <qsa.energies.adhesion_hessian.AdhesionDerivatives.hessian>`: a
+            :class:`~qsa.linalg.ReducedHessian` (finite differences, short range) or a
+            dense ndarray.
+
+        Returns
+        -------
+        ndarray or ReducedHessian, shape (2N, 2N)
+        """
+        return self.derivatives(c).hessian(form)
+
+    def hessian_vector(self, c, v) -> np.ndarray:
+        """``nabla_I^2 E_A v`` without assembling the Hessian (O(N + pairs) per vector).
+
+        Parameters
+        ----------
+        c : Curve
+        v : array_like, shape (2N,) or (2N, m)
+
+        Returns
+        -------
+        ndarray, shape like ``v``
+        """
+        return self.derivatives(c).hessian_vector(v)

@@ -31,7 +31,7 @@ import scipy.sparse as sp
 from qsa._checks import real_number
 from qsa.curve import Curve
 from qsa.geometry import apply_laplace_s
-from qsa.linalg import SparsePlusLowRank
+from qsa.linalg import ReducedHessian, SparsePlusLowRank
 
 __all__ = ["Energy", "EnergySum", "Perimeter", "add_matrices", "generic_normal_velocity"]
 
@@ -41,13 +41,15 @@ def add_matrices(a, b):
 
     Parameters
     ----------
-    a, b : ndarray, sparse matrix or SparsePlusLowRank, shape (n, m)
+    a, b : ndarray, sparse matrix, SparsePlusLowRank or ReducedHessian, shape (n, m)
 
     Returns
     -------
-    ndarray, sparse matrix or SparsePlusLowRank, shape (n, m)
-        Dense if either is dense; a :class:`~qsa.linalg.SparsePlusLowRank` if either is
-        one and the other is sparse; sparse if both are.
+    ndarray, sparse matrix, SparsePlusLowRank or ReducedHessian, shape (n, m)
+        Dense if either is dense; else a :class:`~qsa.linalg.ReducedHessian` if either
+        is one (the others' terms join its sparse and low-rank parts); a
+        :class:`~qsa.linalg.SparsePlusLowRank` if either is one and the other is
+        sparse; sparse if both are.
 
     Examples
     --------
@@ -57,6 +59,10 @@ def add_matrices(a, b):
     >>> sp.issparse(add_matrices(sp.identity(2), sp.identity(2)))
     True
     """
+    if isinstance(b, ReducedHessian) and not isinstance(a, ReducedHessian):
+        return b + a
+    if isinstance(a, ReducedHessian):
+        return a + b
     if isinstance(b, SparsePlusLowRank) and not isinstance(a, SparsePlusLowRank):
         return b + a
     if sp.issparse(a) and isinstance(b, np.ndarray):
@@ -185,8 +191,9 @@ class Energy(ABC):
         Returns
         -------
         matrix, shape (2N, 2N)
-            Dense ``ndarray`` (Fourier), sparse CSR or
-            :class:`~qsa.linalg.SparsePlusLowRank` (finite differences).
+            Dense ``ndarray`` (Fourier), sparse CSR,
+            :class:`~qsa.linalg.SparsePlusLowRank` or :class:`~qsa.linalg.ReducedHessian`
+            (finite differences).
 
         Examples
         --------

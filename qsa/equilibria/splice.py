@@ -97,6 +97,14 @@ class SpliceProfile:
     def cut_front(self, x):
         """``psi~, psi~', psi~''`` at local coordinates x (any shape).
 
+        ``psi~ - kstar H(x) = chi (psi_h - kstar H(x))``: the front's tail ``gap`` is
+        computed without cancellation and the cutoff ``chi`` is evaluated only where it
+        acts (``l1 < |x| < l2``). For the quartic well the front is logistic, so one
+        exponential gives all three (``q = e^{-lambda |x|} / (1 + e^{-lambda |x|})``:
+        ``gap = -+ kstar q``, ``psi_h' = lambda kstar q (1 - q)``, ``psi_h'' = -+
+        lambda^2 kstar q (1 - q) (1 - 2 q)``); other wells use the front's quadrature
+        and ``psi_h'' = W'(psi_h) / alpha^2``.
+
         Parameters
         ----------
         x : array_like
@@ -105,23 +113,52 @@ class SpliceProfile:
         Returns
         -------
         psi, dpsi, d2psi : ndarray, shape like ``x``
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa.equilibria import heteroclinic
+        >>> front = heteroclinic(0.1, kstar=5.0)
+        >>> prof = SpliceProfile(front, [0.0, 1.0, 2.0, 3.0], 8.0, (1.0, 2.0))
+        >>> x = np.array([-0.3, 0.0, 0.2, 1.5, 2.5])  # tail, centre, tail, cutoff, step
+        >>> v0, v1, v2 = prof.cut_front(x)
+        >>> bool(np.allclose(v0[:3], front(x[:3]), rtol=1e-14))
+        True
+        >>> bool(v0[-1] == 5.0 and v1[-1] == 0.0 and v2[-1] == 0.0)  # beyond l2: the step
+        True
         """
+        x = np.asarray(x, dtype=float)
         f = self.front
         k = f.kstar
         r = np.abs(x)
-        w = self.l2 - self.l1
-        S, S1, S2 = _smoothstep((self.l2 - r) / w)
-        chi, dchi, d2chi = S, -np.sign(x) * S1 / w, S2 / w**2
-        live = r < self.l2
-        xs = np.where(live, x, 0.0)
-        psi = f(xs)
-        gap = np.where(x > 0, -f.complement(xs), psi)  # psi_h - kstar H(x), no cancellation
-        dpsi = f.derivative(xs)
-        d2psi = f.well.dW(psi) / f.alpha**2
-        step = k * (x > 0)
-        v0 = np.where(live, step + chi * gap, step)
-        v1 = np.where(live, dchi * gap + chi * dpsi, 0.0)
-        v2 = np.where(live, d2chi * gap + 2 * dchi * dpsi + chi * d2psi, 0.0)
+        pos = x > 0
+        live = r < self.l2  # beyond l2 the cut front is the bare step
+        if f.closed_form:
+            lam = f.rates[0]
+            sg = np.where(pos, -k, k) * live
+            q = np.exp(-lam * r)
+            q /= 1 + q
+            q1 = q * (1 - q)
+            gap = sg * q
+            v1 = (lam * k) * q1 * live
+            v2 = (lam * lam) * sg * q1 * (1 - 2 * q)
+        else:
+            xs = np.where(live, x, 0.0)
+            psi = f(xs)
+            gap = np.where(pos, -f.complement(xs), psi) * live  # psi_h - kstar H(x)
+            v1 = f.derivative(xs) * live
+            v2 = (f.well.dW(psi) / f.alpha**2) * live
+        v0 = gap + k * pos
+        mid = np.flatnonzero(live & (r > self.l1))
+        if mid.size:
+            w = self.l2 - self.l1
+            f0, f1, f2 = v0.reshape(-1), v1.reshape(-1), v2.reshape(-1)  # views
+            S, S1, S2 = _smoothstep((self.l2 - r.reshape(-1)[mid]) / w)
+            dchi, d2chi = -np.sign(x.reshape(-1)[mid]) * S1 / w, S2 / w**2
+            g, d1 = gap.reshape(-1)[mid], f1[mid]
+            f0[mid] = f0[mid] + (S - 1) * g
+            f1[mid] = dchi * g + S * d1
+            f2[mid] = d2chi * g + 2 * dchi * d1 + S * f2[mid]
         return v0, v1, v2
 
     def local(self, sigma):

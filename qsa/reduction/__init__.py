@@ -1,16 +1,20 @@
 """Front-position reduction of the faceting flow (quasi-steady dynamics of splices).
 
-:mod:`qsa.reduction.fronts` detects and tracks the fronts of any curvature
-profile; :mod:`qsa.reduction.ode` is the front-position ODE ``p' = F(p)`` on the
-manifold of heteroclinic splices ``psi_N(p)`` (see its docstring for the
-derivation of the metric). Its validation against the DAE flow and the full
-linearization (``qsa reproduce fronts``) is :mod:`qsa.paper.fronts`;
-``SCENARIOS``, ``compare_fronts`` and ``compare_eigenvalues`` stay importable
-from here as aliases.
+:mod:`qsa.reduction.fronts` detects and tracks the fronts of any curvature profile.
+The front-position ODE ``p' = F(p)`` on the manifold of heteroclinic splices
+``psi_N(p)`` is :class:`FrontODE` (:mod:`qsa.reduction.ode`), built of the splice
+manifold's fields (:mod:`qsa.reduction.manifold`, with the derivation of the metric),
+the optional slow-manifold correction of the force (:mod:`qsa.reduction.correction`),
+a numpy or compiled evaluation (:mod:`qsa.reduction.backends`) and the integration
+through collisions (:mod:`qsa.reduction.integrate`). Its validation against the DAE
+flow and the full linearization (``qsa reproduce fronts``) is :mod:`qsa.paper.fronts`;
+``SCENARIOS``, ``compare_fronts`` and ``compare_eigenvalues`` stay importable from here
+as aliases.
 """
 
 import importlib
 
+from qsa.reduction.backends import FrontEvaluation
 from qsa.reduction.fronts import (
     CoarseningEvent,
     Fronts,
@@ -19,11 +23,20 @@ from qsa.reduction.fronts import (
     track_flow,
     track_fronts,
 )
-from qsa.reduction.ode import FrontODE, FrontODEResult, collision_distance, collision_sensitivity
+from qsa.reduction.integrate import (
+    FrontODEResult,
+    ODECollision,
+    ODESegment,
+    collision_distance,
+    collision_sensitivity,
+)
+from qsa.reduction.manifold import SpliceFields
+from qsa.reduction.ode import FrontODE
 
 __all__ = ["CoarseningEvent", "Fronts", "FrontTracks", "detect_fronts", "track_flow",
            "track_fronts", "FrontODE", "FrontODEResult", "collision_distance",
-           "collision_sensitivity", "SCENARIOS", "compare_fronts", "compare_eigenvalues"]
+           "collision_sensitivity", "SCENARIOS", "compare_fronts", "compare_eigenvalues",
+           "FrontEvaluation", "ODECollision", "ODESegment", "SpliceFields"]
 
 #: aliases of qsa.paper, resolved on first use (qsa.paper imports this package)
 _PAPER_ALIASES = {"SCENARIOS": "qsa.paper.scenarios", "compare_fronts": "qsa.paper.fronts",

@@ -1,9 +1,10 @@
 r"""Compiled (numba) evaluation of the front ODE's right-hand side: the optional ``fast`` backend.
 
-One call of :func:`front_rhs` does what :meth:`FrontODE._velocity` does with numpy
-(fronts, angle, normal velocities, metric, force, closure, saddle-point solve) for the
-quartic well (logistic fronts) in fused loops, without temporaries of numpy call
-overhead. Differences from the numpy reference (see :mod:`qsa.reduction.ode`, "Cost"):
+One call of :func:`front_rhs` evaluates what the numpy backend
+(:class:`qsa.reduction.backends.NumpyBackend`) evaluates -- fronts, angle, normal
+velocities, metric, force (optionally Newton-corrected), closure, saddle-point solve --
+for the quartic well (logistic fronts) in fused loops, without the temporaries and
+call overhead of numpy. It differs from the numpy reference only by round-off:
 
 * ``Theta_j = int_0^sigma d psi_N / d p_j`` in closed form: ``d psi_N / d p_j = -+ v_1``
   is the derivative of the cut front, so ``Theta_j = -+ (U_j(sigma) - U_j(0))`` with
@@ -13,10 +14,12 @@ overhead. Differences from the numpy reference (see :mod:`qsa.reduction.ode`, "C
   each cell integral from the Lagrange interpolant through the ``2 r`` nearest nodes)
   instead of the FFT; a translation-invariant rule, so the integral over a full period
   is the trapezoid sum (spectrally exact) and the partial integrals carry an
-  ``O(h^{2r})`` error (``~1e-10`` relative at the default 3 nodes per front width,
-  ``r = 8``; tested against the spectral path).
-* The banded Newton correction uses an unblocked banded LU with partial pivoting
-  (the algorithm of LAPACK ``dgbtf2``) on the same folded 8th-order difference matrix.
+  ``O(h^{2r})`` error (``r = 8``; the order is tested, and the results against the
+  spectral path).
+* The banded Newton correction (:mod:`qsa.reduction.correction`) eliminates the folded
+  8th-order difference matrix without pivoting when the growth factor stays below
+  :data:`GROWTH_LIMIT` (an ``L D L^T`` factorization) and with partial pivoting (the
+  algorithm of LAPACK ``dgbtf2``) otherwise (:mod:`qsa.reduction._linalg`).
 """
 
 from __future__ import annotations
@@ -26,14 +29,19 @@ from fractions import Fraction
 import numpy as np
 from numba import njit
 
+from qsa.reduction._linalg import (
+    _FM,
+    GROWTH_LIMIT,
+    _back_substitute_1,
+    _band_forward_nopivot,
+    _band_solve,
+    _dot,
+    _gauss_solve,
+    _schur,
+    band_rows,
+)
+
 __all__ = ["cell_weights", "end_weights", "front_rhs", "front_velocity", "band_rows"]
-
-#: Reassociation (vectorized reductions) and contraction (FMA); no finite-math or
-#: approximate-function assumptions (the smoothstep relies on exp overflowing to inf).
-_FM = {"reassoc", "contract", "nsz"}
-
-#: Largest accepted growth factor of the unpivoted banded LU (backward error ~ growth eps).
-GROWTH_LIMIT = 1e4
 
 
 def cell_weights(r=8):
@@ -57,21 +65,6 @@ def cell_weights(r=8):
             den *= k - m
         out.append(float(sum(c / (i + 1) for i, c in enumerate(poly)) / den))
     return np.array(out)
-
-
-def band_rows(perm, ab):
-    """The folded band matrix (LAPACK ``gbsv`` layout, ``kl = ku = kb``) stored by rows.
-
-    Row ``i`` holds the columns ``i - kb ... i + 2 kb`` (room for the pivoting fill-in):
-    ``R[i, t] = A[i, i - kb + t]``.
-    """
-    kb = (ab.shape[0] - 1) // 3
-    M = ab.shape[1]
-    R = np.zeros((M, 3 * kb + 1))
-    for i in range(M):
-        for j in range(max(0, i - kb), min(M, i + kb + 1)):
-            R[i, j - i + kb] = ab[2 * kb + i - j, j]
-    return R
 
 
 def end_weights(wq):
@@ -161,180 +154,10 @@ def _cumulative(F, ck, out):
                 o[M - 1] = h * (o[M - 1] + acc)
 
 
-@njit(cache=True, error_model="numpy")
-def _gauss_solve(K, b):
-    """Solve ``K x = b`` (b of shape (n, m)) by Gaussian elimination with partial pivoting.
-
-    Works on copies. Returns ``(x, ok)``; ``ok`` is False on an exactly zero pivot (as
-    LAPACK ``gesv``'s ``info > 0``).
-    """
-    A = K.copy()
-    x = b.copy()
-    n = A.shape[0]
-    m = x.shape[1]
-    for j in range(n):
-        ip = j
-        big = abs(A[j, j])
-        for i in range(j + 1, n):
-            if abs(A[i, j]) > big:
-                big = abs(A[i, j])
-                ip = i
-        if big == 0.0:
-            return x, False
-        if ip != j:
-            for c in range(n):
-                A[j, c], A[ip, c] = A[ip, c], A[j, c]
-            for c in range(m):
-                x[j, c], x[ip, c] = x[ip, c], x[j, c]
-        for i in range(j + 1, n):
-            f = A[i, j] / A[j, j]
-            if f != 0.0:
-                for c in range(j + 1, n):
-                    A[i, c] -= f * A[j, c]
-                for c in range(m):
-                    x[i, c] -= f * x[j, c]
-    for j in range(n - 1, -1, -1):
-        for c in range(m):
-            v = x[j, c]
-            for i in range(j + 1, n):
-                v -= A[j, i] * x[i, c]
-            x[j, c] = v / A[j, j]
-    return x, True
-
-
-@njit(cache=True, error_model="numpy")
-def _band_solve(A, kb, x):
-    """Solve the banded system stored by rows (:func:`band_rows`) in place: ``x`` (M, m).
-
-    Partial pivoting within the band (LAPACK ``dgbtf2``); ``A`` is overwritten. False
-    on an exactly zero pivot.
-    """
-    M = A.shape[0]
-    for j in range(M):
-        last = min(j + kb, M - 1)
-        ip = j
-        big = abs(A[j, kb])
-        for i in range(j + 1, last + 1):
-            v = abs(A[i, j - i + kb])
-            if v > big:
-                big = v
-                ip = i
-        if big == 0.0:
-            return False
-        span = min(j + 2 * kb, M - 1) - j + 1
-        if ip != j:
-            rj = A[j, kb:kb + span]
-            ri = A[ip, j - ip + kb:j - ip + kb + span]
-            for t in range(span):
-                rj[t], ri[t] = ri[t], rj[t]
-            xj, xi = x[j], x[ip]
-            for c in range(xj.size):
-                xj[c], xi[c] = xi[c], xj[c]
-        _eliminate_column(A, kb, x, j, last, span)
-    _back_substitute(A, kb, x, 2 * kb)
-    return True
-
-
-@njit(cache=True, error_model="numpy")
-def _eliminate_column(A, kb, x, j, last, span):
-    """Rows ``j+1 .. last`` minus multiples of row ``j`` (pivot ``A[j, kb]``, ``span``
-    stored entries from the diagonal), and the same on the right-hand sides ``x``."""
-    rowj = A[j, kb:kb + span]
-    xj = x[j]
-    piv = rowj[0]
-    for i in range(j + 1, last + 1):
-        f = A[i, j - i + kb] / piv
-        if f != 0.0:
-            rowi = A[i, j - i + kb:j - i + kb + span]
-            rowi[0] = 0.0
-            for t in range(1, span):
-                rowi[t] -= f * rowj[t]
-            xi = x[i]
-            for c in range(xi.size):
-                xi[c] -= f * xj[c]
-
-
-@njit(cache=True, error_model="numpy")
-def _band_forward_nopivot(A, kb, x):
-    """Forward elimination of :func:`_band_solve` without pivoting: ``A -> U`` (upper
-    half-bandwidth ``kb``: half the work), ``x -> L^{-1} x``.
-
-    Returns the growth factor ``max |U| / max |A|`` (inf on a zero pivot); the backward
-    error is ``O(growth eps)`` (Wilkinson), so the caller accepts the factorization only
-    for a modest growth and otherwise redoes the solve with pivoting.
-    """
-    M = A.shape[0]
-    amax = 0.0
-    for i in range(M):
-        for t in range(2 * kb + 1):
-            amax = max(amax, abs(A[i, t]))
-    umax = 0.0
-    for j in range(M):
-        span = min(j + kb, M - 1) - j + 1
-        rowj = A[j, kb:kb + span]
-        piv = rowj[0]
-        if piv == 0.0:
-            return np.inf
-        for t in range(span):
-            umax = max(umax, abs(rowj[t]))
-        _eliminate_column(A, kb, x, j, j + span - 1, span)
-    return umax / amax
-
-
-@njit(cache=True, error_model="numpy")
-def _back_substitute_1(A, kb, z):
-    """:func:`_back_substitute` of one column ``z`` (M,), ``U`` of half-bandwidth ``kb``."""
-    M = A.shape[0]
-    for j in range(M - 1, -1, -1):
-        span = min(j + kb, M - 1) - j + 1
-        v = z[j]
-        for t in range(1, span):
-            v -= A[j, kb + t] * z[j + t]
-        z[j] = v / A[j, kb]
-
-
-@njit(cache=True, error_model="numpy")
-def _back_substitute(A, kb, x, ku):
-    """Solve ``U x = x`` in place, ``U`` (upper half-bandwidth ``ku``) in the rows of A."""
-    M = A.shape[0]
-    for j in range(M - 1, -1, -1):
-        xj = x[j]
-        span = min(j + ku, M - 1) - j + 1
-        rowj = A[j, kb:kb + span]
-        for t in range(1, span):
-            xt = x[j + t]
-            f = rowj[t]
-            for c in range(xj.size):
-                xj[c] -= f * xt[c]
-        piv = rowj[0]
-        for c in range(xj.size):
-            xj[c] = xj[c] / piv
-
-
-@njit(cache=True, fastmath=_FM, error_model="numpy")
-def _schur(Wl, YT, d, symmetric):
-    """``mu = (Wl Y_B^T)^{-1} Wl Y_R`` and ``d = Y_R - Y_B mu`` (``YT = [Y_R; Y_B^T]``)."""
-    nb, M = Wl.shape
-    S = np.empty((nb, nb))
-    Bx = np.empty((nb, 1))
-    for a in range(nb):
-        Bx[a, 0] = _dot(Wl[a], YT[0])
-        for b in range(a if symmetric else 0, nb):
-            S[a, b] = _dot(Wl[a], YT[1 + b])
-            if symmetric:
-                S[b, a] = S[a, b]
-    mu, ok = _gauss_solve(S, Bx)
-    d[:] = YT[0]
-    for b in range(nb):
-        m = mu[b, 0]
-        for i in range(M):
-            d[i] -= m * YT[1 + b, i]
-    return mu, ok
-
-
 @njit(cache=True, fastmath=_FM, error_model="numpy")
 def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
-    """Overwrite ``Rk`` with the residual of ``psi + delta`` (:meth:`FrontODE._correction`).
+    """Overwrite ``Rk`` with the residual of ``psi + delta`` (as
+    :func:`qsa.reduction.correction.newton_correction`).
 
     ``H = -alpha^2 d^2 + W''(psi)`` in folded order (band rows :func:`band_rows`), the
     bordered system by one banded LU and the Schur complement on ``B = [dpsi, 1]``.
@@ -416,15 +239,6 @@ def _newton_residual(psi, Rk, dpsi, a2, k, L, band, perm):
             Nd -= Bf[i, a] * mu[a, 0]
         Rk[pi] = Nd - mu[n, 0]
     return 0 if ok3 and ok2 else (2 if not ok3 else 1)
-
-
-@njit(cache=True, fastmath=_FM, error_model="numpy")
-def _dot(a, b):
-    """``sum a * b`` (vectorized: reassociated)."""
-    v = 0.0
-    for i in range(a.size):
-        v += a[i] * b[i]
-    return v
 
 
 @njit(cache=True, error_model="numpy")
@@ -583,7 +397,8 @@ def _fronts(p, L, l1, l2, k, lam, M, variable):
 @njit(cache=True, fastmath=_FM, error_model="numpy")
 def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable, beta,
               L_star):
-    """The reduced velocity and its ingredients (see :meth:`FrontODE._velocity`).
+    """The reduced velocity and its ingredients (as
+    :meth:`qsa.reduction.backends.NumpyBackend.evaluate`).
 
     Returns ``sol`` (``p'`` [, ``L'``] and the multipliers), ``status`` (0; 1: the
     saddle-point matrix ``K`` is exactly singular, the caller solves it by least squares;
@@ -703,7 +518,7 @@ def front_rhs(p, L, l1, l2, k, lam, a2, M, ck, correction, band, perm, variable,
         K[a, kk + 3] = 1.0 / np.sqrt(n)
         K[kk + 3, a] = 1.0 / np.sqrt(n)
     if variable:
-        # dE/dL and dC/dL at fixed p (FrontODE._length_derivatives)
+        # dE/dL and dC/dL at fixed p (qsa.reduction.manifold.length_derivatives)
         e_int = 0.0
         gdE = 0.0
         gw = 0.0

@@ -137,3 +137,45 @@ def test_paper_cutoff_scaling_with_alpha_gives_alpha_independent_error():
         r.append(np.max(np.abs(prof.residuals(s)[0])))
     assert r[1] == pytest.approx(r[0], rel=0.05)  # no decay with alpha
     assert r[0] > 1e-3  # far above the fixed-cutoff residual ~ exp(-lambda d_min) ~ 1e-11
+
+
+def _cut_front_cases():
+    x = np.concatenate([np.linspace(-2.6, 2.6, 2001), [0.0, 1.0, -1.0, 2.0, -2.0]])
+    return x, (1.0, 2.0)
+
+
+def test_cut_front_derivatives_match_differences(sine_well):
+    """``psi~'`` and ``psi~''`` against central differences, across the cutoff band."""
+    from qsa.equilibria import heteroclinic
+
+    x, cut = _cut_front_cases()
+    x = x[(np.abs(np.abs(x) - 1.0) > 1e-3) & (np.abs(np.abs(x) - 2.0) > 1e-3)]  # C^inf, but
+    for front in (heteroclinic(0.3, kstar=K), heteroclinic(0.3, sine_well)):  # steep there
+        prof = SpliceProfile(front, [0.0, 1.0, 2.0, 3.0], 8.0, cut)
+        v0, v1, v2 = prof.cut_front(x)
+        h = 1e-5
+        p0, p1, _ = prof.cut_front(x + h)
+        m0, m1, _ = prof.cut_front(x - h)
+        assert np.max(np.abs((p0 - m0) / (2 * h) - v1)) < 1e-6 * np.max(np.abs(v1))
+        assert np.max(np.abs((p1 - m1) / (2 * h) - v2)) < 1e-6 * np.max(np.abs(v2))
+        band = (np.abs(x) > 1.0) & (np.abs(x) < 2.0)
+        assert np.max(np.abs(v0[band] - front.kstar * (x[band] > 0))) > 0  # the cutoff acts
+        assert np.all(v0[np.abs(x) >= 2.0] == front.kstar * (x[np.abs(x) >= 2.0] > 0))
+
+
+def test_cut_front_closed_form_equals_quadrature_path(monkeypatch):
+    """The logistic closed form against the same quartic front built by quadrature."""
+    import importlib
+
+    from qsa.equilibria import heteroclinic
+
+    x, cut = _cut_front_cases()
+    exact = SpliceProfile(heteroclinic(0.3, kstar=K), [0.0, 1.0], 8.0, cut)
+    het_module = importlib.import_module("qsa.equilibria.heteroclinic")
+    monkeypatch.setattr(het_module, "is_quartic", lambda well, kstar: False)
+    quad = SpliceProfile(heteroclinic(0.3, kstar=K), [0.0, 1.0], 8.0, cut)
+    assert exact.front.closed_form and not quad.front.closed_form
+    for a, b in zip(exact.cut_front(x), quad.cut_front(x), strict=True):
+        assert np.max(np.abs(a - b)) < 1e-10 * np.max(np.abs(a))
+    # shapes are kept (scalars, matrices)
+    assert exact.cut_front(0.5)[0].shape == () and exact.cut_front(np.ones((3, 2)))[2].shape == (3, 2)

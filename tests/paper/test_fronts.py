@@ -43,7 +43,7 @@ def test_short_facet_fast_variant():
 
 
 def test_short_facet_newton_correction():
-    # the corrected force (qsa.reduction.ode, "Accuracy") with the length as an unknown:
+    # the corrected force (qsa.reduction.correction) with the length as an unknown:
     # collision time within 1% (uncorrected 2.4%), positions within 5% to 0.99 t_c
     s = compare_fronts("short-facet", N=600, correction="newton").summary()
     assert s["correction"] == "newton"
@@ -59,7 +59,7 @@ def test_dae_vs_ode_resolved(scenario):
     s = compare_fronts(scenario, N=1200).summary()
     assert s["collision_rel_diff"] < 0.1
     # within 5% of the smallest facet up to 0.95 t_c; beyond, the error grows like
-    # eps / (1 - t/t_c) (see qsa.reduction.ode, "Validity")
+    # eps / (1 - t/t_c) (see qsa.reduction.integrate, "Validity")
     assert s["error_at"]["0.95"] < 0.05
     v = s["variable_length"]
     assert v["collision_rel_diff"] < 0.1
