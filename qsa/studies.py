@@ -340,7 +340,7 @@ def mode_decay(eq, N=192, mode=None, amplitude=2e-3, efolds=3.0, tol=1e-7, snaps
         Nodes of the flow (and of the spectrum).
     mode : int, optional
         Index into the eigenvalues sorted descending; default: the first one below -1
-        (the slowest O(1) decaying mode).
+        outside the kernel (the slowest O(1) decaying mode).
 
     Returns
     -------
@@ -354,7 +354,7 @@ def mode_decay(eq, N=192, mode=None, amplitude=2e-3, efolds=3.0, tol=1e-7, snaps
     c = equilibria.polish(eq.energy, eq.curve.on_grid(FiniteDifference(N))).curve
     sp = spectra.spectrum(eq.energy, c)
     lam = sp.eigenvalues
-    i = int(np.argmax(lam < -1.0)) if mode is None else int(mode)
+    i = int(np.argmax((lam < -1.0) & ~sp.is_kernel)) if mode is None else int(mode)
     lam1, phi = float(lam[i]), sp.eigenvectors[:, i]
     if not lam1 < 0:
         raise ValueError(f"mode {i} has eigenvalue {lam1:.3g} >= 0: it does not decay")

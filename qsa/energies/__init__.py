@@ -9,7 +9,7 @@ On the closed manifold, ``normal_velocity``, ``multipliers`` (Lambda of
 
 from qsa.energies.adhesion import Adhesion, AdhesionKernel
 from qsa.energies.base import Energy, EnergySum, Perimeter
-from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
+from qsa.energies.constrained import multipliers, normal_velocity, residual_floor, residual_scale
 from qsa.energies.faceting import Faceting
 from qsa.energies.functionalized import FunctionalizedCurvature
 from qsa.energies.helfrich import CanhamHelfrich
@@ -38,5 +38,6 @@ __all__ = [
     "SecondOrderEnergy",
     "multipliers",
     "normal_velocity",
+    "residual_floor",
     "residual_scale",
 ]

@@ -14,6 +14,9 @@ spectra and the continuation alike:
 ``residual_scale(energy, curve)``
     The largest single term of ``V^n``; ``max|V^n| / residual_scale`` is the
     relative residual every solver reports.
+``residual_floor(energy, curve)``
+    The round-off level of ``max|V^n|`` at this curve: no equilibrium of the discrete
+    equations can be found, or recognised, below it.
 """
 
 from __future__ import annotations
@@ -23,7 +26,9 @@ import numpy as np
 from qsa.curve import Curve
 from qsa.geometry import apply_laplace_s, constraint_gradients
 
-__all__ = ["normal_velocity", "multipliers", "residual_scale"]
+__all__ = ["normal_velocity", "multipliers", "residual_scale", "residual_floor"]
+
+_EPS = np.finfo(float).eps
 
 
 def normal_velocity(energy, curve: Curve) -> np.ndarray:
@@ -89,6 +94,48 @@ def residual_scale(energy, curve: Curve) -> float:
         for t in (apply_laplace_s(curve, mu), curve.kappa**2 * mu, curve.kappa * xi):
             scale = max(scale, float(np.max(np.abs(t))))
     return scale if scale > 0 else 1.0
+
+
+def residual_floor(energy, curve: Curve, probes=2, seed=0) -> float:
+    """Round-off level of ``max|V^n|``: its change when ``kappa, g`` move by one rounding unit.
+
+    ``V^n`` is a differential operator of order 4 (faceting) in ``kappa``: the rounding
+    of the stored curvature alone changes it by about ``eps |kappa|`` times its
+    highest-order coefficients, which grow like ``N^4``. An equilibrium computed or
+    checked in floating point has ``max|V^n|`` of this size at best; a curve with
+    ``max|V^n| <= 100 residual_floor`` is an equilibrium to working precision.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+    probes : int
+        Random relative perturbations ``(1 + eps r)``, ``r = +-1``, of ``kappa`` and ``g``.
+    seed : int
+
+    Returns
+    -------
+    float
+        ``max`` over the probes of ``max|V^n(perturbed) - V^n|``.
+
+    Examples
+    --------
+    >>> from qsa import Curve, FiniteDifference
+    >>> from qsa.energies import Faceting
+    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), FiniteDifference(1000))
+    >>> floor = residual_floor(Faceting(0.1, 5.0), c)
+    >>> bool(0 < floor < 1e-3 * residual_scale(Faceting(0.1, 5.0), c))
+    True
+    """
+    rng = np.random.default_rng(seed)
+    V0 = energy.normal_velocity(curve)
+    worst = 0.0
+    for _ in range(probes):
+        k = curve.kappa * (1 + _EPS * rng.choice([-1.0, 1.0], size=curve.N))
+        g = curve.g * (1 + _EPS * rng.choice([-1.0, 1.0], size=curve.N))
+        V1 = energy.normal_velocity(curve.with_kappa(k).with_g(g))
+        worst = max(worst, float(np.max(np.abs(V1 - V0))))
+    return worst
 
 
 def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:

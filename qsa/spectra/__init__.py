@@ -5,26 +5,29 @@
 ``linearization(energy, curve, gauge)`` with gauges ``"comoving"``
 (``-M M-dagger L_Lambda``), ``"paper"`` (e:FOE-Lin as printed), ``"normal"``
 (``J``, dsigma-self-adjoint) and ``"scaled"``; ``spectrum(...)`` -> :class:`Spectrum`
-(dense or shift-invert, kernel tolerance, spurious-mode rejection) and
-``kernel_report(...)`` -> :class:`KernelReport`.
+(every eigenvalue with an error estimate; the slow ones from the factored operator,
+:mod:`qsa.spectra.factored`, so that they are right at every resolution; kernel,
+spurious-mode rejection) and ``kernel_report(...)`` -> :class:`KernelReport`.
 """
 
 from qsa.spectra.eigen import (
-    KernelReport,
+    MESSAGES,
     NotEquilibriumWarning,
-    Spectrum,
-    kernel_report,
-    operator_norm,
+    UnresolvedEigenvalueWarning,
+    certify,
+    reject_spurious,
     second_resolution,
     small_cluster,
     spectrum,
 )
+from qsa.spectra.factored import EigenErrors, FactoredNormalOperator, ShiftInvert
 from qsa.spectra.hessian import (
     DENSE_CONSTRAINT_LIMIT,
     LagrangeHessian,
     hessian,
     lagrange_hessian,
 )
+from qsa.spectra.kernel import kernel_report, operator_norm, rigid_normal_basis
 from qsa.spectra.linearization import (
     GAUGES,
     linearization,
@@ -32,9 +35,21 @@ from qsa.spectra.linearization import (
     scaled_operator,
     symmetric_form,
 )
+from qsa.spectra.result import KernelReport, Spectrum
+from qsa.spectra.solvers import EigenSolution, certified_eigenpairs
 
 __all__ = [
     "DENSE_CONSTRAINT_LIMIT",
+    "MESSAGES",
+    "EigenErrors",
+    "EigenSolution",
+    "FactoredNormalOperator",
+    "ShiftInvert",
+    "UnresolvedEigenvalueWarning",
+    "certified_eigenpairs",
+    "certify",
+    "reject_spurious",
+    "rigid_normal_basis",
     "GAUGES",
     "KernelReport",
     "LagrangeHessian",

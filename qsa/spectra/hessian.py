@@ -28,7 +28,12 @@ import numpy as np
 
 from qsa.curve import Curve
 from qsa.energies.base import Energy, add_matrices
-from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
+from qsa.energies.constrained import (
+    multipliers,
+    normal_velocity,
+    residual_floor,
+    residual_scale,
+)
 from qsa.geometry import constraint_gradients, constraint_hessians
 
 __all__ = ["hessian", "lagrange_hessian", "LagrangeHessian", "inner_norm", "check_input",
@@ -153,10 +158,13 @@ class LagrangeHessian:
         ``max |V^n|`` (the normal velocity; zero at an equilibrium).
     relative_residual : float
         ``residual`` divided by the largest single term of ``V^n``
-        (:func:`qsa.equilibria.residual_scale`): the scale-free distance from equilibrium.
+        (:func:`qsa.energies.residual_scale`): the scale-free distance from equilibrium.
     constraints_included : tuple of bool, shape (3,)
         Which ``Lambda_j nabla^2 C_j`` terms are in ``matrix``.
     message : str
+    residual_floor : float
+        The round-off level of ``max|V^n|`` at this curve
+        (:func:`qsa.energies.residual_floor`).
 
     Parameters
     ----------
@@ -181,6 +189,20 @@ class LagrangeHessian:
     relative_residual: float
     constraints_included: tuple
     message: str = ""
+    residual_floor: float = 0.0
+
+    def is_equilibrium(self, tol=1e-6) -> bool:
+        """``relative_residual <= tol``, or ``max|V^n|`` within 100 times its round-off floor.
+
+        Parameters
+        ----------
+        tol : float
+
+        Returns
+        -------
+        bool
+        """
+        return bool(self.relative_residual <= tol or self.residual <= 100 * self.residual_floor)
 
 
 def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessian:
@@ -234,6 +256,7 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     Vn = normal_velocity(energy, curve)
     vres = float(np.max(np.abs(Vn)))
     vrel = vres / residual_scale(energy, curve)
+    vfloor = residual_floor(energy, curve)
 
     dense_ok = (not curve.grid.sparse) or curve.N <= DENSE_CONSTRAINT_LIMIT
     floor = max(res_abs, 1e-8 * inner_norm(curve, grad))
@@ -252,11 +275,12 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     included = (use12, use12, True)
     msg = (f"Lambda = {np.array2string(Lam, precision=6)}; projection residual "
            f"{res_abs:.2e} ({res_rel:.1e} relative); max|V^n| = {vres:.2e} "
-           f"({vrel:.1e} of the largest term)")
+           f"({vrel:.1e} of the largest term, {vres / max(vfloor, 1e-300):.1e} times its "
+           "round-off floor)")
     if not use12:
         msg += (f"; Lambda_1,2 terms omitted (|Lambda_1,2| = {np.abs(Lam[:2]).max():.1e}, "
                 "below the projection's accuracy)")
-    return LagrangeHessian(L, H, Lam, res_abs, res_rel, vres, vrel, included, msg)
+    return LagrangeHessian(L, H, Lam, res_abs, res_rel, vres, vrel, included, msg, vfloor)
 
 
 def _hc3(curve: Curve):

@@ -1,0 +1,484 @@
+"""The normal-velocity linearization ``J`` kept as its factors, and solves with ``J - sigma``.
+
+``J = -[M-dagger L_Lambda M(., 0)]_1`` is a differential operator of order 6 for the
+faceting energy (4 for Canham-Helfrich): formed as a matrix, its entries are sums of
+terms of size ``|J| ~ h^-6`` that cancel, so every eigenvalue computed from the formed
+matrix carries an absolute round-off error of order ``eps |J|`` -- at ``N = 10^4`` on
+finite differences that is larger than the slow eigenvalues themselves. The factors
+are of order 2 each. With ``W = diag(dsigma)``, ``W2 = diag(dsigma, dsigma)``,
+``H = W2 L_Lambda`` (symmetric) and the normal columns of ``M``,
+``M1 = [G; diag(g kappa)]`` (``G = -Delta_s - kappa^2``),
+
+    W J = -M1^T H M1,
+
+so ``J`` is self-adjoint in ``<f, h> = int f h dsigma`` and ``(W J) phi = lambda W phi``
+is a symmetric-definite pencil. Its eigenvalues nearest a shift ``sigma`` are the
+largest of ``(W J - sigma W)^{-1} W``, and that inverse is applied without forming
+``J``: with ``psi = G phi`` and ``chi = H_kk psi + H_kg (g kappa phi)`` the system
+``(W J - sigma W) phi = b`` is the sparse (finite differences) or dense (Fourier)
+``3N x 3N`` system
+
+    [ -sigma W - gk H_gg gk    -gk H_gk    -G^T ] [phi]   [b]
+    [ -H_kg gk                 -H_kk        I   ] [psi] = [0]        (gk = diag(g kappa))
+    [ -G                        I           0   ] [chi]   [0]
+
+whose blocks are the order-2 factors themselves. Two kinds of dense columns are
+bordered on (block elimination with one step of iterative refinement, which is
+accurate even when the core is nearly singular): the low-rank part ``U V^T`` of ``H``
+(the perimeter penalty's rank-one term on finite-difference grids), and the
+deflation of the rigid motions -- the solution is kept ``<.,.>``-orthogonal to the
+normal components ``R`` of the rigid motions (exactly in ``ker J`` in the continuum),
+so the pencil is solved on their orthogonal complement and the rigid Ritz values are
+computed separately, by the factored quadratic form.
+
+Round-off then enters through the factors: the error of a slow eigenvalue scales with
+the order-2 blocks applied to its (smooth) eigenvector, not with ``|J|``.
+
+Error estimates (absolute, per eigenvalue ``lambda`` with ``<.,.>``-unit eigenvector
+``phi``, ``nu = 1/(lambda - sigma)``):
+
+* the residual of the inverse problem, ``r = |K phi - nu phi|``, ``K = (W J - sigma W)^{-1} W``
+  (self-adjoint in ``<.,.>``: an eigenvalue of ``K`` lies within ``r`` of ``nu``),
+  plus the solve's own forward error ``d`` (the size of the iterative-refinement
+  correction): ``|lambda - lambda_true| <= (r + d) / (|nu| (|nu| - r - d))``;
+* the rounding of the factors' entries (relative ``eps`` each, independent): the
+  first-order change of ``lambda = -(M1 phi)^T H (M1 phi)`` has standard deviation
+  ``eps / sqrt(3) * sqrt(sum_ij (H_ij psi_i psi_j)^2 + 4 sum_i chi_i^2 sum_j (M1_ij phi_j)^2)``
+  with ``psi = M1 phi``, ``chi = H psi``; three standard deviations are added.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from qsa import geometry
+from qsa.curve import Curve
+from qsa.linalg import SparsePlusLowRank, factorize
+
+__all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
+
+_EPS = np.finfo(float).eps
+
+
+def _split_low_rank(L):
+    """``(S, U, V)`` with ``L = S + U V^T`` (``U, V`` empty when ``L`` has no low-rank part)."""
+    if isinstance(L, SparsePlusLowRank):
+        return L.S, L.U, L.V
+    n = L.shape[0]
+    return L, np.zeros((n, 0)), np.zeros((n, 0))
+
+
+def _square(A):
+    """Entrywise square (same matrix type)."""
+    if sp.issparse(A):
+        return A.multiply(A).tocsr()
+    return np.asarray(A) ** 2
+
+
+@dataclass(frozen=True, eq=False)
+class FactoredNormalOperator:
+    """``J = -W^{-1} M1^T H M1`` held as its order-2 factors (see the module docstring).
+
+    Attributes
+    ----------
+    curve : Curve
+    G : matrix, shape (N, N)
+        ``-Delta_s - kappa^2`` (sparse for finite differences, dense for Fourier).
+    gk : ndarray, shape (N,)
+        ``g kappa`` (the lower block of ``M1``).
+    H : matrix, shape (2N, 2N)
+        ``W2 S`` with ``S`` the sparse (or dense) part of ``L_Lambda``; symmetric.
+    U, V : ndarray, shape (2N, r)
+        The low-rank part of ``W2 L_Lambda`` is ``U V^T`` (``U`` already scaled by ``W2``).
+    w : ndarray, shape (N,)
+        ``dsigma``.
+
+    Parameters
+    ----------
+    Built by :meth:`from_lagrangian`.
+
+    Examples
+    --------
+    The factored product equals the formed ``J`` where the latter is accurate:
+
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> from qsa.spectra import lagrange_hessian, normal_operator
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> op = FactoredNormalOperator.from_lagrangian(eq.curve, lagrange_hessian(eq.energy, eq.curve).matrix)
+    >>> phi = np.cos(2 * np.pi * 2 * eq.curve.grid.s)
+    >>> bool(np.allclose(op.matvec(phi), normal_operator(eq.energy, eq.curve) @ phi))
+    True
+    """
+
+    curve: Curve
+    G: object
+    gk: np.ndarray
+    H: object
+    U: np.ndarray
+    V: np.ndarray
+    w: np.ndarray
+
+    @classmethod
+    def from_lagrangian(cls, curve: Curve, L) -> FactoredNormalOperator:
+        """The factors of ``J`` for the Lagrangian Hessian ``L`` (dsigma-self-adjoint).
+
+        Parameters
+        ----------
+        curve : Curve
+        L : matrix, shape (2N, 2N)
+            ``L_Lambda``: dense, sparse or :class:`~qsa.linalg.SparsePlusLowRank`.
+
+        Returns
+        -------
+        FactoredNormalOperator
+        """
+        w = curve.dsigma
+        w2 = np.concatenate([w, w])
+        S, U, V = _split_low_rank(L)
+        if curve.grid.sparse:
+            H = (sp.diags(w2) @ sp.csr_matrix(S)).tocsr()
+        else:
+            H = w2[:, None] * np.asarray(S.toarray() if sp.issparse(S) else S)
+        return cls(curve, geometry.helmholtz(curve), curve.g * curve.kappa, H,
+                   w2[:, None] * U, V, w)
+
+    @property
+    def N(self) -> int:
+        """Number of nodes."""
+        return self.curve.N
+
+    @property
+    def rank(self) -> int:
+        """Number of columns of the low-rank part."""
+        return self.U.shape[1]
+
+    # -------------------------------------------------------------- products
+    def normal_map(self, phi):
+        """``M1 phi = (G phi, g kappa phi)``, shape (2N,) or (2N, k)."""
+        phi = np.asarray(phi, dtype=float)
+        gk = self.gk if phi.ndim == 1 else self.gk[:, None]
+        return np.concatenate([self.G @ phi, gk * phi], axis=0)
+
+    def weighted_hessian(self, psi):
+        """``H psi + U (V^T psi)`` (the full ``W2 L_Lambda`` applied)."""
+        out = self.H @ psi
+        if self.rank:
+            out = out + self.U @ (self.V.T @ psi)
+        return out
+
+    def matvec(self, phi):
+        """``J phi`` through the factors, shape like ``phi`` ((N,) or (N, k)).
+
+        The product of three order-2 operators: its round-off is ``eps`` times the
+        size of the intermediate results, so for rough vectors it is as large as for
+        the formed matrix; use the solves for eigenvalues.
+        """
+        psi = self.normal_map(phi)
+        chi = self.weighted_hessian(psi)
+        N = self.N
+        gk = self.gk if np.ndim(phi) == 1 else self.gk[:, None]
+        w = self.w if np.ndim(phi) == 1 else self.w[:, None]
+        return -(self.G.T @ chi[:N] + gk * chi[N:]) / w
+
+    def quadratic(self, X, Y=None):
+        """``Y^T W J X = -(M1 Y)^T (W2 L) (M1 X)``, computed without forming ``J``.
+
+        Parameters
+        ----------
+        X : ndarray, shape (N, k)
+        Y : ndarray, shape (N, m), optional
+            Default ``X``.
+
+        Returns
+        -------
+        ndarray, shape (m, k)
+        """
+        X = np.asarray(X, dtype=float).reshape(self.N, -1)
+        PX = self.normal_map(X)
+        PY = PX if Y is None else self.normal_map(np.asarray(Y, dtype=float).reshape(self.N, -1))
+        return -(PY.T @ self.weighted_hessian(PX))
+
+    def form(self):
+        """The matrix ``J`` (dense for Fourier, sparse or :class:`SparsePlusLowRank` for FD).
+
+        Its eigenvalues carry an absolute round-off error of order ``eps |J|``.
+        """
+        N = self.N
+        if self.curve.grid.sparse:
+            M1 = sp.vstack([sp.csr_matrix(self.G), sp.diags(self.gk)]).tocsr()
+            core = -(M1.T @ (self.H @ M1))
+            core = (sp.diags(1.0 / self.w) @ core).tocsr()
+            if self.rank:
+                return SparsePlusLowRank(core, -(M1.T @ self.U) / self.w[:, None],
+                                         M1.T @ self.V)
+            return core
+        M1 = np.vstack([np.asarray(self.G), np.diag(self.gk)])
+        out = -(M1.T @ (self.H @ M1 + self.U @ (self.V.T @ M1)))
+        del N
+        return out / self.w[:, None]
+
+    # ---------------------------------------------------------------- solves
+    def shift_invert(self, sigma=0.0, deflate=None) -> ShiftInvert:
+        """The bordered factorization applying ``(W J - sigma W)^{-1}`` (see :class:`ShiftInvert`)."""
+        return ShiftInvert(self, float(sigma), deflate)
+
+    def ritz(self, R):
+        """Ritz values, vectors and errors of ``J`` on ``span R`` (rows ``<.,.>``-orthonormal).
+
+        The Rayleigh quotients come from the factored quadratic form, so their error is
+        the rounding of the factors (:meth:`rounding_error`), not ``eps |J|``.
+
+        Parameters
+        ----------
+        R : ndarray, shape (m, N)
+
+        Returns
+        -------
+        values : ndarray, shape (m,)
+        vectors : ndarray, shape (N, m)
+        errors : ndarray, shape (m,)
+        """
+        R = np.asarray(R, dtype=float).reshape(-1, self.N)
+        if R.shape[0] == 0:
+            return np.zeros(0), np.zeros((self.N, 0)), np.zeros(0)
+        B = self.quadratic(R.T)
+        vals, Q = np.linalg.eigh(0.5 * (B + B.T))
+        vecs = R.T @ Q
+        return vals, vecs, self.rounding_error(vecs) + _EPS * np.abs(vals)
+
+    # ------------------------------------------------------ rounding estimate
+    def rounding_error(self, phi):
+        """Three standard deviations of the change of ``phi^T W J phi`` from rounding the factors.
+
+        ``phi`` has unit ``<.,.>`` norm (columns of an (N, k) array are treated
+        separately). See the module docstring.
+
+        Returns
+        -------
+        ndarray, shape (k,)
+        """
+        phi = np.asarray(phi, dtype=float).reshape(self.N, -1)
+        psi = self.normal_map(phi)
+        chi = self.weighted_hessian(psi)
+        H2 = _square(self.H)
+        N = self.N
+        G2 = _square(self.G)
+        M1phi2 = np.concatenate([G2 @ phi**2, (self.gk[:, None] * phi) ** 2], axis=0)
+        a = np.sum(psi**2 * (H2 @ psi**2), axis=0)
+        b = 4.0 * np.sum(chi**2 * M1phi2, axis=0)
+        del N
+        return 3.0 * _EPS / np.sqrt(3.0) * np.sqrt(a + b)
+
+
+@dataclass(frozen=True)
+class EigenErrors:
+    """Error estimates of computed eigenpairs (absolute, in the eigenvalue).
+
+    Attributes
+    ----------
+    residual : ndarray, shape (k,)
+        From the residual of the inverse problem and the solve's forward error.
+    rounding : ndarray, shape (k,)
+        From rounding the factors' entries (three standard deviations).
+    total : ndarray, shape (k,)
+        ``residual + rounding + eps |lambda|``.
+
+    Parameters
+    ----------
+    The attributes above.
+    """
+
+    residual: np.ndarray
+    rounding: np.ndarray
+    total: np.ndarray
+
+
+class ShiftInvert:
+    """``(W J - sigma W)^{-1}`` on the ``<.,.>``-complement of the deflated span, never forming J.
+
+    The ``3N`` system of the module docstring is factored once (sparse LU on finite
+    differences, dense LU on Fourier grids); the low-rank part of ``H`` and the
+    deflation constraints ``R W phi = 0`` (with multipliers ``W R^T mu`` in the first
+    block row) are bordered on by block elimination. Every solve is followed by one
+    step of iterative refinement with the residual of the whole bordered system; the
+    size of that correction estimates the forward error (:attr:`last_correction`).
+
+    Parameters
+    ----------
+    op : FactoredNormalOperator
+    sigma : float
+    deflate : ndarray, shape (m, N), optional
+        Rows ``<.,.>``-orthonormal; the solution is kept orthogonal to them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa.equilibria import circle
+    >>> from qsa.spectra import lagrange_hessian
+    >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+    >>> op = FactoredNormalOperator.from_lagrangian(eq.curve, lagrange_hessian(eq.energy, eq.curve).matrix)
+    >>> si = op.shift_invert(sigma=1.0)
+    >>> phi = np.cos(2 * np.pi * 2 * eq.curve.grid.s)  # lambda_2 = -4.86
+    >>> bool(np.allclose(si.solve(eq.curve.dsigma * phi), phi / (-4.86 - 1.0)))
+    True
+    """
+
+    def __init__(self, op: FactoredNormalOperator, sigma: float, deflate=None):
+        self.op = op
+        self.sigma = sigma
+        N = op.N
+        R = np.zeros((0, N)) if deflate is None else np.asarray(deflate, dtype=float)
+        self.R = R
+        sparse = op.curve.grid.sparse
+        w, gk, G, H = op.w, op.gk, op.G, op.H
+        Hkk, Hkg = H[:N, :N], H[:N, N:]
+        Hgk, Hgg = H[N:, :N], H[N:, N:]
+        if sparse:
+            I = sp.identity(N, format="csr")
+            dgk = sp.diags(gk)
+            A11 = -sigma * sp.diags(w) - dgk @ Hgg @ dgk
+            core = sp.bmat([[A11, -(dgk @ Hgk), -G.T],
+                            [-(Hkg @ dgk), -Hkk, I],
+                            [-G, I, None]], format="csc")
+        else:
+            I = np.eye(N)
+            A11 = -sigma * np.diag(w) - gk[:, None] * Hgg * gk[None, :]
+            core = np.block([[A11, -gk[:, None] * Hgk, -np.asarray(G).T],
+                             [-Hkg * gk[None, :], -Hkk, I],
+                             [-np.asarray(G), I, np.zeros((N, N))]])
+        self._core = core
+        r, m = op.rank, R.shape[0]
+        # border columns B1 (3N, r + m), rows B2 (r + m, 3N), corner D
+        B1 = np.zeros((3 * N, r + m))
+        B2 = np.zeros((r + m, 3 * N))
+        if r:
+            B1[:N, :r] = -gk[:, None] * op.U[N:]
+            B1[N:2 * N, :r] = -op.U[:N]
+            B2[:r, :N] = -(op.V[N:] * gk[:, None]).T
+            B2[:r, N:2 * N] = -op.V[:N].T
+        if m:
+            WR = (R * w[None, :]).T
+            B1[:N, r:] = WR
+            B2[r:, :N] = WR.T
+        D = np.zeros((r + m, r + m))
+        D[:r, :r] = np.eye(r)
+        self._B1, self._B2, self._D = B1, B2, D
+        self._lu = factorize(core, B1, B2, D)
+        self._free = None
+        self.last_correction = np.zeros(0)
+
+    @property
+    def shape(self):
+        """``(N, N)``: the operator acts on nodal vectors."""
+        return (self.op.N, self.op.N)
+
+    def _apply(self, x, p):
+        """The core with the first ``p`` border columns/rows times ``x`` ((n + p,) or (n + p, k))."""
+        n = self._core.shape[0]
+        B1, B2, D = self._B1[:, :p], self._B2[:p], self._D[:p, :p]
+        y = self._core @ x[:n] + B1 @ x[n:]
+        z = B2 @ x[:n] + D @ x[n:]
+        return np.concatenate([y, z], axis=0)
+
+    def _refined(self, lu, p, b, refine, estimate):
+        N = self.op.N
+        b = np.asarray(b, dtype=float)
+        rhs = np.zeros((self._core.shape[0] + p,) + b.shape[1:])
+        rhs[:N] = b
+        x = lu.solve(rhs)
+        for _ in range(refine):
+            x = x + lu.solve(rhs - self._apply(x, p))
+        if estimate:
+            dx = lu.solve(rhs - self._apply(x, p))
+            w = self.op.w if b.ndim == 1 else self.op.w[:, None]
+            self.last_correction = np.sqrt(np.sum(w * dx[:N] ** 2, axis=0))
+        return x[:N]
+
+    def solve(self, b, refine=1, estimate=False):
+        """``phi`` with ``(W J - sigma W) phi + W R^T mu = b``, ``R W phi = 0``.
+
+        ``b`` has shape (N,) or (N, k) (columns solved together). ``refine`` steps of
+        iterative refinement follow the block-elimination solve (the residual of the
+        whole bordered system, in working precision; one step makes block elimination
+        accurate even when the core is nearly singular). With ``estimate=True`` one
+        further correction is computed but not applied; its ``<.,.>`` norm (per column),
+        an estimate of the forward error of the returned ``phi``, is stored in
+        :attr:`last_correction`.
+        """
+        return self._refined(self._lu, self._B1.shape[1], b, refine, estimate)
+
+    def solve_free(self, b, refine=1, estimate=False):
+        """As :meth:`solve`, with the same factors but without the deflation."""
+        r = self.op.rank
+        if self._free is None:
+            self._free = self._lu.with_border(self._B1[:, :r], self._B2[:r], self._D[:r, :r])
+        return self._refined(self._free, r, b, refine, estimate)
+
+    def kernel_ritz(self, R):
+        """Ritz values of ``J`` on ``span R`` from the inverse, with error estimates.
+
+        Rayleigh-Ritz for ``K = (W J - sigma W)^{-1} W`` (without the deflation) on the
+        span of the ``<.,.>``-orthonormal rows ``R``: ``K`` smooths, so the rounding noise
+        of the rigid fields (computed from the node positions) does not enter, as it
+        does in the direct quadratic form (:meth:`FactoredNormalOperator.ritz`), whose
+        error grows like ``eps^2 |J|``.
+
+        Parameters
+        ----------
+        R : ndarray, shape (m, N)
+
+        Returns
+        -------
+        values : ndarray, shape (m,)
+        vectors : ndarray, shape (N, m)
+        errors : ndarray, shape (m,)
+        """
+        w = self.op.w
+        m = R.shape[0]
+        if m == 0:
+            return np.zeros(0), np.zeros((self.op.N, 0)), np.zeros(0)
+        X = self.solve_free(w[:, None] * R.T)
+        A = R @ (w[:, None] * X)
+        nu, Q = np.linalg.eigh(0.5 * (A + A.T))
+        vecs = R.T @ Q
+        KX = self.solve_free(w[:, None] * vecs, estimate=True)
+        vals = self.sigma + 1.0 / nu
+        res = KX - nu[None, :] * vecs
+        rn = np.sqrt(np.sum(w[:, None] * res**2, axis=0)) + self.last_correction
+        den = np.abs(nu) * (np.abs(nu) - rn)
+        err = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
+        err = err + self.op.rounding_error(vecs) + _EPS * np.abs(vals)
+        return vals, vecs, err
+
+    def operator(self):
+        """``K = (W J - sigma W)^{-1} W`` as a ``scipy.sparse.linalg.LinearOperator``."""
+        w = self.op.w
+        return spla.LinearOperator(self.shape, matvec=lambda x: self.solve(w * x), dtype=float)
+
+    def errors(self, eigenvalues, vectors) -> EigenErrors:
+        """Error estimates of eigenpairs of the pencil (module docstring).
+
+        Parameters
+        ----------
+        eigenvalues : ndarray, shape (k,)
+        vectors : ndarray, shape (N, k)
+            ``<.,.>``-normalised.
+
+        Returns
+        -------
+        EigenErrors
+        """
+        w = self.op.w
+        lam = np.asarray(eigenvalues, dtype=float)
+        nu = 1.0 / (lam - self.sigma)
+        r = self.solve(w[:, None] * vectors, estimate=True) - nu[None, :] * vectors
+        rn = np.sqrt(np.sum(w[:, None] * r * r, axis=0)) + self.last_correction
+        den = np.abs(nu) * (np.abs(nu) - rn)
+        res = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
+        rnd = self.op.rounding_error(vectors)
+        return EigenErrors(res, rnd, res + rnd + _EPS * np.abs(lam))

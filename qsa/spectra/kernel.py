@@ -1,0 +1,258 @@
+"""The kernel of the linearization: rigid motions, the exact kernel relations, their residuals.
+
+At a constrained equilibrium (e:Abs-CP) the Lagrangian Hessian ``L_Lambda`` kills
+``(nabla_s kappa, 0)`` and every reparameterization mode ``M(0, v)`` (e:Hessian_Kernel,
+with the multiplier term), ``M`` kills the rigid motions (lem:kerM), ``M-dagger`` kills
+the constraint gradients ``Psi_j``, and the normal components of the rigid motions span
+the kernel of ``J``. :func:`kernel_report` measures each relation; the kernel of ``J`` is
+counted from eigenvalues with error estimates: the deflated rigid modes (their Ritz
+values) plus any further eigenvalue that cannot be told apart from them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from qsa import geometry
+from qsa._checks import real_number
+from qsa.curve import Curve
+from qsa.spectra.factored import FactoredNormalOperator
+from qsa.spectra.hessian import check_input, inner_norm, lagrange_hessian
+from qsa.spectra.result import KernelReport
+from qsa.spectra.solvers import certified_eigenpairs
+
+__all__ = ["kernel_report", "operator_norm", "rigid_normal_basis", "kernel_size",
+           "EQUILIBRIUM_TOL"]
+
+#: Relative residual (``max|V^n|`` over its largest term) below which a curve counts as an
+#: equilibrium, so that the rigid motions are deflated from ``J``.
+EQUILIBRIUM_TOL = 1e-6
+
+
+def operator_norm(curve: Curve, A, iters=30, seed=0) -> float:
+    """Estimate of the ``<.,.>``-operator norm of ``A`` (power iteration on ``A-dagger A``).
+
+    ``A`` acts on nodal (N,) or stacked (2N,) vectors; the estimate is a lower
+    bound, accurate to a few digits after ``iters`` iterations.
+
+    Parameters
+    ----------
+    curve : Curve
+        Supplies the ``<f, h> = int f h dsigma`` weights.
+    A : matrix, shape (N, N) or (2N, 2N)
+    iters : int
+    seed : int
+        Seed of the random start vector.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> est = operator_norm(c, np.diag(np.linspace(1.0, 3.0, 17)))  # exact norm: 3
+    >>> bool(2.99 < est <= 3.0 + 1e-12)
+    True
+    """
+    n = A.shape[0]
+    w = curve.dsigma if n == curve.N else np.concatenate([curve.dsigma] * (n // curve.N))
+    rw = np.sqrt(w)
+    x = np.random.default_rng(seed).standard_normal(n)
+    x /= np.linalg.norm(x)
+    val = 0.0
+    for _ in range(iters):
+        # B = W^{1/2} A W^{-1/2}; power iteration on B^T B
+        y = rw * (A @ (x / rw))
+        z = (A.T @ (rw * y)) / rw
+        nz = np.linalg.norm(z)
+        if nz == 0 or not np.isfinite(nz):
+            return float(np.linalg.norm(y))
+        val = np.sqrt(nz)
+        x = z / nz
+    return float(val)
+
+
+def rigid_normal_basis(curve: Curve, rtol=1e-8) -> np.ndarray:
+    """``<.,.>``-orthonormal basis of the normal components of the rigid motions, (m, N).
+
+    ``m = 3``, or 2 for a circle (whose rotation is a reparameterization).
+
+    Parameters
+    ----------
+    curve : Curve
+    rtol : float
+        Singular values below ``rtol`` times the largest are dropped.
+
+    Returns
+    -------
+    ndarray, shape (m, N)
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> rigid_normal_basis(Curve.circle(1.0, Fourier(17))).shape
+    (2, 17)
+    """
+    N = curve.N
+    phi = geometry.rigid_motions(curve)[:, :N]
+    rw = np.sqrt(curve.dsigma)
+    U, s, _ = np.linalg.svd((phi * rw).T, full_matrices=False)
+    r = int(np.sum(s > rtol * s[0]))
+    return (U[:, :r] / rw[:, None]).T
+
+
+def kernel_size(values, errors, is_kernel):
+    """``(n_kernel, kernel_tol)`` of eigenvalues with errors and the deflated rigid modes.
+
+    The kernel is the deflated rigid modes plus the other eigenvalues that are zero
+    within their error (``|lambda| <= error``); ``kernel_tol`` is the largest
+    ``|lambda| + error`` over it.
+
+    Parameters
+    ----------
+    values, errors : ndarray, shape (m,)
+    is_kernel : ndarray of bool, shape (m,)
+
+    Returns
+    -------
+    n_kernel : int
+    kernel_tol : float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> kernel_size(np.array([1e-9, 2e-9, 0.5, -1e-12]), np.array([1e-10, 1e-10, 1e-9, 1e-11]),
+    ...             np.array([True, True, False, False]))
+    (3, 2.1e-09)
+    """
+    values = np.real(np.asarray(values))
+    errors = np.asarray(errors, dtype=float)
+    kernel = np.asarray(is_kernel, dtype=bool) | (np.abs(values) <= errors)
+    tol = float(np.max(np.abs(values[kernel]) + errors[kernel], initial=0.0))
+    return int(kernel.sum()), tol
+
+
+def _rel(curve, A, x, normA):
+    nx = inner_norm(curve, x)
+    if nx == 0 or normA == 0:
+        return 0.0
+    return inner_norm(curve, A @ x) / (normA * nx)
+
+
+def _smooth_random(curve: Curve, modes=8, seed=1):
+    rng = np.random.default_rng(seed)
+    s = curve.grid.s
+    kmax = max(1, min(modes, (curve.N - 1) // 6))
+    v = rng.standard_normal()
+    for k in range(1, kmax + 1):
+        a, b = rng.standard_normal(2) / k
+        v = v + a * np.cos(2 * np.pi * k * s) + b * np.sin(2 * np.pi * k * s)
+    return v
+
+
+def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol) -> KernelReport:
+    """The :class:`KernelReport` from a Lagrangian Hessian and the kernel count."""
+    N = curve.N
+    L = LH.matrix
+    H = LH.energy_hessian
+    normL = operator_norm(curve, L)
+    normH = operator_norm(curve, H)
+    Mmat = geometry.M(curve)
+    normM = operator_norm(curve, Mmat)
+    ks = curve.grad_s(curve.kappa)
+    if inner_norm(curve, ks) <= 1e-9 * inner_norm(curve, curve.kappa) * N / curve.length():
+        ks = np.zeros(N)  # a circle: nabla_s kappa is round-off
+    x = np.concatenate([ks, np.zeros(N)])
+    lag = _rel(curve, L, x, normL)
+    en = _rel(curve, H, x, normH)
+    pred = 0.0
+    if inner_norm(curve, x) > 0 and normH > 0:
+        pred = float(abs(LH.multipliers[2]) * inner_norm(curve, np.concatenate([np.zeros(N),
+                                                                             ks / curve.g]))
+                     / (normH * inner_norm(curve, x)))
+    rig = geometry.rigid_motions(curve)
+    rigid = np.array([_rel(curve, Mmat, r, normM) for r in rig])
+    Md = geometry.M_adjoint(curve)
+    Psi = geometry.constraint_gradients(curve)
+    psi = np.array([_rel(curve, Md, p, normM) for p in Psi])
+    v = _smooth_random(curve)
+    rep = _rel(curve, L, geometry.reparameterization_mode(curve, v), normL)
+    rigid_normal = np.zeros(3)
+    for j, phi in enumerate(basis):
+        rigid_normal[j] = inner_norm(curve, op.matvec(phi))
+    m = basis.shape[0]
+    notes = []
+    if inner_norm(curve, x) == 0:
+        notes.append("nabla_s kappa = 0 (a circle): the kernel element (nabla_s kappa, 0) is void")
+    elif pred > max(1e-10, 10 * lag):
+        notes.append(
+            f"Lambda_3 = {LH.multipliers[2]:.6g} != 0, so nabla^2 E (nabla_s kappa, 0) = "
+            "(nabla_s d_kE, d_kE nabla_s kappa / g) is not 0: the kernel element belongs to "
+            "L_Lambda = nabla^2 E - Lambda . nabla^2 C, not to nabla^2 E")
+    if m < 3:
+        notes.append(f"the rigid motions have only {m} independent normal "
+                     "components (rotation of a circle about its centre is a reparameterization)")
+    if n_kernel is not None and n_kernel != m:
+        notes.append(f"numerical kernel dimension {n_kernel} differs from the expected {m}: "
+                     f"{n_kernel - m} eigenvalue(s) within the rigid modes' level "
+                     f"kernel_tol = {kernel_tol:.2e}")
+    return KernelReport(lag, en, pred, rigid, psi, rep, rigid_normal, n_kernel, m,
+                        float(kernel_tol), LH.multipliers, LH.projection_residual,
+                        LH.relative_projection_residual, LH.relative_residual, tuple(notes))
+
+
+def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> KernelReport:
+    """Residual norms of the exact kernel relations, and the kernel dimension of ``J``.
+
+    Parameters
+    ----------
+    energy : Energy
+    curve : Curve
+    eigenvalues : array_like, optional
+        Eigenvalues of ``J`` to count the kernel from (``|lambda| <= kernel_tol``).
+        Default: the eigenvalues nearest 0 computed from the factors with the rigid
+        motions deflated (:func:`qsa.spectra.solvers.certified_eigenpairs`), the kernel
+        being the rigid modes and any eigenvalue indistinguishable from them.
+    kernel_tol : float, optional
+        Threshold for ``eigenvalues``; default: the rigid modes' level.
+
+    Returns
+    -------
+    KernelReport
+
+    Examples
+    --------
+    >>> from qsa.equilibria import npulse
+    >>> eq = npulse(3, 0.3)
+    >>> rep = kernel_report(eq.energy, eq.curve)
+    >>> rep.kernel_dimension, rep.expected_kernel_dimension, rep.lagrange_kernel < 1e-6
+    (3, 3, True)
+    """
+    check_input(energy, curve)
+    LH = lagrange_hessian(energy, curve)
+    op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
+    basis = rigid_normal_basis(curve)
+    m = basis.shape[0]
+    if eigenvalues is None:
+        # deflation is exact at an equilibrium only; elsewhere count from J's own spectrum
+        if LH.is_equilibrium(EQUILIBRIUM_TOL):
+            sol = certified_eigenpairs(op, basis, k=min(m + 6, curve.N - 1), sigma=0.0)
+        else:
+            sol = certified_eigenpairs(op, np.zeros((0, curve.N)), k=min(m + 6, curve.N - 1),
+                                       sigma=0.0, rigid=op.ritz(basis)[0])
+        n_kernel, tol = kernel_size(sol.values, sol.errors, sol.is_kernel)
+        if kernel_tol is not None:
+            tol = real_number(kernel_tol, "kernel_tol", positive=True)
+            n_kernel = int(np.sum(np.abs(sol.values) <= tol))
+    else:
+        ev = np.real(np.asarray(eigenvalues, dtype=complex))
+        if kernel_tol is None:
+            rvals, _, rerr = op.ritz(basis)
+            tol = float(np.max(np.abs(rvals) + rerr, initial=0.0))
+        else:
+            tol = real_number(kernel_tol, "kernel_tol", positive=True)
+        n_kernel = int(np.sum(np.abs(ev) <= tol))
+    return build_kernel_report(curve, LH, op, basis, n_kernel, tol)
