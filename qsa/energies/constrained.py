@@ -139,7 +139,7 @@ def residual_floor(energy, curve: Curve, probes=2, seed=0) -> float:
 
 
 def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
-    """Lagrange multipliers ``Lambda`` of ``nabla_I E = Lambda . Psi`` (e:Abs-CP), shape (3,).
+    """Lagrange multipliers ``Lambda`` of ``nabla_I E = Lambda.Psi`` (e:Abs-CP), shape (3,).
 
     The least-squares projection of ``nabla_I E`` onto ``span Psi`` in
     ``<f, h> = int f h dsigma``: ``G Lambda = b`` with the Gram matrix
