@@ -71,7 +71,14 @@ Representations
       L_YY = diag(-g a, K_XX),
 
   and the constraint Jacobians ``c_Y``, ``c_U``: O(N + P) nonzeros, products in
-  O(N + P) and ``(H - sigma I)^{-1}`` from one sparse LU of a 12N saddle-point system.
+  O(N + P) and ``(H - sigma I)^{-1}`` from one sparse LU of an 8N saddle-point system
+  (its fill grows like the square of the neighbours per node: for short-range kernels).
+
+The matrix-free product differences the node displacements ``X1_i - X1_j`` before
+applying the pair Hessian; the assembled forms store ``K`` with its diagonal blocks
+as row sums (translation invariance) and apply it to the displacements themselves,
+so along smooth directions their round-off is larger by about the ratio of the
+curve's size to the kernel's range.
 
 Exact identities (tests)
 ------------------------
