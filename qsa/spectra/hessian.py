@@ -10,7 +10,7 @@ not of ``nabla_I^2 E`` alone (e:cF-Hessian is the energy part; the constraint
 Hessians e:cC-Hessian, e:cC-Hessian3 are taken from :mod:`qsa.geometry`, which
 implements their corrected form).
 
-# NOTE: the paper linearizes with ``nabla^2 E`` (e:FOE-Lin); MATH.md section 4 shows
+# NOTE: the paper linearizes with ``nabla^2 E`` (e:FOE-Lin); Conventions and errata, section 4 shows
 # that this is only right when ``Lambda = 0`` and that the correct operator is
 # ``L_Lambda``. Both are available here and in :mod:`qsa.spectra.linearization`.
 
@@ -237,7 +237,7 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     Notes
     -----
     ``Lambda`` is the ``<.,.>``-least-squares solution of ``nabla_I E = Lambda . Psi``
-    (MATH.md section 4); e:Abs-CP, e:cF-Hessian, e:cC-Hessian, e:cC-Hessian3.
+    (Conventions and errata, section 4); e:Abs-CP, e:cF-Hessian, e:cC-Hessian, e:cC-Hessian3.
 
     Examples
     --------
