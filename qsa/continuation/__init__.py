@@ -13,8 +13,16 @@ This package stands above :mod:`qsa.equilibria` and :mod:`qsa.spectra` (it uses
 both); ``qsa.equilibria.continuation`` is a deprecated alias of it.
 """
 
-from qsa.continuation.branch import MESSAGES, Bifurcation, Branch, BranchPoint, CriticalMode, Fold
+from qsa.continuation.branch import (
+    MESSAGES,
+    Bifurcation,
+    Branch,
+    BranchPoint,
+    CriticalMode,
+    Fold,
+)
+from qsa.continuation.switching import switch_branch
 from qsa.continuation.tracking import continuation
 
 __all__ = ["Bifurcation", "Branch", "BranchPoint", "CriticalMode", "Fold", "MESSAGES",
-           "continuation"]
+           "continuation", "switch_branch"]

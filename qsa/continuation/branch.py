@@ -272,6 +272,12 @@ class Branch:
         The symmetry kept along the branch (the sectors of ``sector_unstable``).
     n_eigensolves : int
         Shift-invert eigen-solves (one factorization each) spent on stability.
+    energy_factory : callable
+        The family ``p -> Energy`` of the branch.
+    constraints : tuple
+        The exact constraints besides closure.
+    origin : Bifurcation or None
+        The bifurcation a switched branch starts from (:func:`switch_branch`).
 
     Parameters
     ----------
@@ -303,6 +309,9 @@ class Branch:
     bifurcations: tuple = ()
     symmetry: object = None
     n_eigensolves: int = 0
+    energy_factory: object = field(default=None, repr=False)
+    constraints: tuple = ()
+    origin: object = field(default=None, repr=False)
     extra: dict = field(default_factory=dict, repr=False)
 
     @property

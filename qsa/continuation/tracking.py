@@ -274,21 +274,23 @@ def _natural(factory, prob, x, vals, param, stab, opts):
         msg += (f"; det F_x changes sign after point(s) {list(bps)} (a fold or branch "
                 "point)")
     return Branch(param, tuple(points), (), bps, "natural", status >= 0, status, msg,
-                  len(points) - 1, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves)
+                  len(points) - 1, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves,
+                  factory, tuple(prob.constraints or ()))
 
 
 # ------------------------------------------------------------------ pseudo-arclength
 def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, stab,
-               refine_folds, opts):
+               refine_folds, opts, p0=None, prev=None):
     tol, maxiter = opts["tol"], opts["maxiter"]
     lo, hi = float(np.min(vals)), float(np.max(vals))
     ds = abs(step)
     ds_max = 10 * ds if ds_max is None else real_number(ds_max, "ds_max", positive=True)
     ds_min = 1e-4 * ds if ds_min is None else real_number(ds_min, "ds_min", positive=True)
     n = x.size
-    y = np.append(x, vals[0])
-    prev = np.zeros(n + 1)
-    prev[-1] = np.sign(vals[-1] - vals[0])
+    y = np.append(x, vals[0] if p0 is None else p0)
+    if prev is None:
+        prev = np.zeros(n + 1)
+        prev[-1] = np.sign(vals[-1] - vals[0])
     t, det = tangent(prob, x, y[-1], prev)
     points = [make_point(prob, y, t[-1], det, stab.record(factory(y[-1]),
                                                           prob.system.curve(x)))]
@@ -387,7 +389,8 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
     if bps and not stab.on:
         msg += f"; det F_x changes sign without a fold after point(s) {list(bps)}"
     return Branch(param, tuple(points), tuple(folds), bps, "pseudo-arclength", status >= 0,
-                  status, msg, steps, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves)
+                  status, msg, steps, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves,
+                  factory, tuple(prob.constraints or ()))
 
 
 def _last_before_contact(prob, y, t, ds, tol, maxiter, bisections=8):

@@ -108,3 +108,29 @@ def test_no_stability_no_branch_points_but_folds():
     assert b.n_unstable is None and b.n_eigensolves == 0
     assert [(x.kind, x.modes) for x in b.bifurcations] == [("fold", ())]
     assert b.bifurcations[0].parameter == b.folds[0].param
+
+
+def test_three_pulse_family_in_alpha_stability_per_bloch_block():
+    """3-pulses at fixed L*: the coarsening pair (Bloch index 1, double) is unstable all
+    along; at the fold in alpha the symmetric block (index 0) gains an unstable mode."""
+    from qsa.spectra import spectrum
+
+    eq = npulse(3, 0.2, grid=Fourier(99), kstar=K, beta=BETA)
+    Ls = eq.params["L_star"]
+    b = continuation(lambda a: Faceting(a, K) + Perimeter(BETA, Ls), eq.curve, "alpha",
+                     (0.2, 0.3, 0.01))
+    assert b.success, b.message
+    assert b.symmetry.order == 3 and b.symmetry.reflection is not None
+    (fold,) = b.folds
+    i = fold.index
+    for j, p in enumerate(b.points):
+        assert p.sector_unstable == ((0, 2) if j <= i else (1, 2))
+        ref = spectrum(p.equilibrium.energy, p.curve, reject_spurious=False)
+        assert ref.n_unstable == p.n_unstable
+        # the Bloch index 1 block holds the double eigenvalues: exact pairs in the full solve
+        lam = ref.unstable
+        assert np.sum(np.isclose(lam, lam.max(), rtol=1e-8)) == 2 or j > i
+    (x,) = b.bifurcations
+    assert x.kind == "fold" and x.sector == 0 and x.multiplicity == 1 and x.change == 1
+    assert x.modes[0].label == "bloch" and x.modes[0].parity == 1
+    assert x.parameter == pytest.approx(fold.param, abs=1e-8)
