@@ -21,8 +21,9 @@ from qsa.continuation.branch import (
     CriticalMode,
     Fold,
 )
+from qsa.continuation.files import save_branch, save_branches
 from qsa.continuation.switching import switch_branch
 from qsa.continuation.tracking import continuation
 
 __all__ = ["Bifurcation", "Branch", "BranchPoint", "CriticalMode", "Fold", "MESSAGES",
-           "continuation", "switch_branch"]
+           "continuation", "save_branch", "save_branches", "switch_branch"]

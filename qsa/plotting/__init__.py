@@ -24,7 +24,7 @@ from qsa.plotting._core import (  # noqa: F401
 __all__ = ["new_figure", "plot_curve", "plot_curvature", "plot_curve_and_curvature", "save"]
 
 #: Topic modules whose ``__all__`` is re-exported (missing ones are skipped).
-_TOPICS = ("spectra", "flows", "fronts", "simulations", "sweep")
+_TOPICS = ("spectra", "flows", "fronts", "simulations", "sweep", "bifurcation")
 
 for _topic in _TOPICS:
     try:
