@@ -16,7 +16,7 @@ ARGS = ["bifurcate", "circle", "--radius", "0.95", "--alpha", "0.1", "--N", "33"
 def test_json_files_and_plot_with_switching(tmp_path, capsys):
     png = tmp_path / "d.png"
     out_dir = tmp_path / "branches"
-    code = main(ARGS + ["--switch", "0", "--max-steps", "6", "--json", "--plot", str(png),
+    code = main(ARGS + ["--switch", "0", "--max-steps", "30", "--json", "--plot", str(png),
                         "--out", str(out_dir)])
     assert code == 0
     out = json.loads(capsys.readouterr().out)
