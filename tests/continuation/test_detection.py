@@ -134,3 +134,19 @@ def test_three_pulse_family_in_alpha_stability_per_bloch_block():
     assert x.kind == "fold" and x.sector == 0 and x.multiplicity == 1 and x.change == 1
     assert x.modes[0].label == "bloch" and x.modes[0].parity == 1
     assert x.parameter == pytest.approx(fold.param, abs=1e-8)
+
+
+def test_numerical_trouble_is_a_status_not_an_exception():
+    eq = circle(1.0, ALPHA, grid=Fourier(17), kstar=K, beta=BETA)
+    Ls0 = eq.params["L_star"]
+
+    def fragile(L_star):
+        if L_star < Ls0 - 0.25:
+            raise np.linalg.LinAlgError("injected failure")
+        return factory()(L_star)
+
+    for method in ("pseudo-arclength", "natural"):
+        b = continuation(fragile, eq.curve, "L_star", (Ls0, Ls0 - 1.0, -0.1), method=method)
+        assert not b.success and b.status == -5 and "injected failure" in b.message
+        assert_status_convention(b, MESSAGES)
+        assert b.points and b.points[-1].param >= Ls0 - 0.25
