@@ -5,7 +5,7 @@ global backend is switched and nothing needs a display; pass ``ax`` to draw into
 an existing figure (e.g. in a notebook).
 
 One module per topic (``_core`` curves, ``spectra``, ``flows``, ``fronts``,
-``simulations``, ``sweep``, ``animation``); every public name is re-exported here, so
+``simulations``, ``sweep``, ``bifurcation``, ``animation``); every public name is re-exported here, so
 ``from qsa.plotting import plot_spectrum`` works whatever module draws it.
 """
 
@@ -24,7 +24,7 @@ from qsa.plotting._core import (  # noqa: F401
 __all__ = ["new_figure", "plot_curve", "plot_curvature", "plot_curve_and_curvature", "save"]
 
 #: Topic modules whose ``__all__`` is re-exported (missing ones are skipped).
-_TOPICS = ("spectra", "flows", "fronts", "simulations", "sweep", "animation")
+_TOPICS = ("spectra", "flows", "fronts", "simulations", "sweep", "bifurcation", "animation")
 
 for _topic in _TOPICS:
     try:
