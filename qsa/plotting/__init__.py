@@ -5,8 +5,9 @@ global backend is switched and nothing needs a display; pass ``ax`` to draw into
 an existing figure (e.g. in a notebook).
 
 One module per topic (``_core`` curves, ``spectra``, ``flows``, ``fronts``,
-``simulations``, ``sweep``, ``bifurcation``, ``animation``); every public name is re-exported here, so
-``from qsa.plotting import plot_spectrum`` works whatever module draws it.
+``simulations``, ``sweep``, ``bifurcation``, ``animation``); every public name is
+re-exported here, so ``from qsa.plotting import plot_spectrum`` works whatever module
+draws it.
 """
 
 from __future__ import annotations
