@@ -2,7 +2,7 @@
 
 For a family of energies ``E_p = energy_factory(p)`` (``p`` = alpha, beta, L*, a
 multiplier ...), follow the solutions of the square system of
-:func:`qsa.equilibria.polish` (:class:`~qsa.equilibria.newton.EquilibriumSystem`),
+:func:`qsa.equilibria.polish` (:class:`~qsa.equilibria.system.EquilibriumSystem`),
 ``F(x, p) = 0`` with ``x = (kappa, L, a)``:
 
 ``method="natural"``
@@ -33,15 +33,9 @@ from qsa._checks import integer, real_number
 from qsa.continuation.branch import MESSAGES, Branch, BranchPoint, Fold
 from qsa.curve import Curve
 from qsa.energies import residual_scale
-from qsa.equilibria.newton import (
-    EquilibriumSystem,
-    NewtonRun,
-    _assemble,
-    _equal_arclength,
-    _Factor,
-    newton_solve,
-    polish_result,
-)
+from qsa.equilibria.newton import NewtonRun, newton_solve, polish_result
+from qsa.equilibria.system import EquilibriumSystem, assemble_jacobian, equal_arclength
+from qsa.linalg import factorize
 
 __all__ = ["continuation"]
 
@@ -98,15 +92,12 @@ class _Problem:
         D2[:-1, -1] = Fp[N:]
         D2[-1, :-1] = row[N:-1]
         D2[-1, -1] = row[-1]
-        aug = _assemble(A, B2, C2, D2, low)
-        return aug, _assemble(A, B, Crows, D, low)
+        aug = assemble_jacobian(A, B2, C2, D2, low)
+        return aug, assemble_jacobian(A, B, Crows, D, low)
 
 
 def _solve_aug(aug, rhs):
-    fac = _Factor(aug)
-    if fac.singular:
-        raise np.linalg.LinAlgError("singular augmented system")
-    out = fac.solve(rhs)
+    out = factorize(aug).solve(rhs)  # LinAlgError if singular
     if not np.all(np.isfinite(out)):
         raise np.linalg.LinAlgError("non-finite solution")
     return out
@@ -131,7 +122,7 @@ def _tangent(prob, x, p, prev):
     t /= np.sqrt(np.sum(wt * t * t))
     if np.sum(wt * t * prev) < 0:
         t = -t
-    det_sign = _Factor(Fx).det_sign()
+    det_sign = factorize(Fx).det_sign()
     return t, det_sign
 
 
@@ -273,7 +264,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     vals, step = _values(values)
     hook = _stability_hook(stability)
     p0 = float(vals[0])
-    guess = _equal_arclength(curve)
+    guess = equal_arclength(curve)
     prob = _Problem(energy_factory, guess, p0)
     run = newton_solve(prob.system, prob.system.pack(guess), tol, max(maxiter, 30),
                        energy=energy_factory(p0))
@@ -288,7 +279,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
 
 def _natural(factory, prob, x, vals, param, tol, maxiter, hook):
     points = []
-    det = _Factor(prob.system.jacobian(x, factory(vals[0]))).det_sign()
+    det = factorize(prob.system.jacobian(x, factory(vals[0]))).det_sign()
     points.append(_point(prob, np.append(x, vals[0]), np.nan, det, hook))
     xs = [x]
     status, msg = 0, f"{MESSAGES[0]} (natural continuation in {param})"
@@ -313,7 +304,7 @@ def _natural(factory, prob, x, vals, param, tol, maxiter, hook):
             break
         n_newton += run.n_newton
         xn = run.x
-        det = _Factor(prob.system.jacobian(xn, factory(p))).det_sign()
+        det = factorize(prob.system.jacobian(xn, factory(p))).det_sign()
         points.append(_point(prob, np.append(xn, p), np.nan, det, hook, run.status,
                              run.history, run.n_newton, run.n_lu))
         xs.append(xn)
