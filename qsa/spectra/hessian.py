@@ -25,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from qsa.curve import Curve
 from qsa.energies.base import Energy, add_matrices
@@ -285,8 +286,6 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
 
 def _hc3(curve: Curve):
     """``nabla^2 C_3 = [[0, 1/g], [1/g, 0]]`` in the grid's matrix type."""
-    import scipy.sparse as sp
-
     N = curve.N
     if curve.grid.sparse:
         d = sp.diags(1.0 / curve.g)
