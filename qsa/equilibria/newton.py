@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from qsa._checks import integer, real_number
+from qsa.constraints import bind_constraints, constraint_normals
 from qsa.curve import Curve
 from qsa.energies import Energy
 from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
@@ -48,8 +49,10 @@ STATUS_MESSAGES = MESSAGES
 class PolishResult(Equilibrium):
     """An :class:`Equilibrium` from :func:`polish`, with the Newton record.
 
-    Attributes (besides those of :class:`Equilibrium`)
-    --------------------------------------------------
+    Besides the attributes of :class:`Equilibrium`:
+
+    Attributes
+    ----------
     status : int
         A key of :data:`MESSAGES`: 0 converged to ``tol``, 1 converged to the round-off
         floor, -1 ``maxiter`` reached, -2 singular system, -3 line search failed.
@@ -65,6 +68,10 @@ class PolishResult(Equilibrium):
         Final unfolding parameters ``a`` (zero up to round-off at a true equilibrium).
     noise_floor : float
         Estimated round-off level of the relative residual on this grid.
+    constraints : tuple of Constraint
+        The bound length / area constraints of the solve (empty without).
+    constraint_multipliers : ndarray, shape (m,)
+        Their multipliers ``mu_i``: ``nabla_I E = Lambda . Psi + sum_i mu_i nabla_I c_i``.
 
     Parameters
     ----------
@@ -85,6 +92,8 @@ class PolishResult(Equilibrium):
     history: np.ndarray = field(default_factory=lambda: np.zeros(0))
     unfolding: np.ndarray = field(default_factory=lambda: np.zeros(3))
     noise_floor: float = 0.0
+    constraints: tuple = ()
+    constraint_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_iter(self) -> int:
@@ -97,7 +106,9 @@ class PolishResult(Equilibrium):
         out.update(status=int(self.status), n_newton=int(self.n_newton), n_lu=int(self.n_lu),
                    history=[float(h) for h in self.history],
                    unfolding=[float(a) for a in self.unfolding],
-                   noise_floor=float(self.noise_floor))
+                   noise_floor=float(self.noise_floor),
+                   constraints=[k.params() for k in self.constraints],
+                   constraint_multipliers=[float(m) for m in self.constraint_multipliers])
         return out
 
 
@@ -245,20 +256,23 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
     return NewtonRun(x, status, np.array(history), n_newton, n_lu, float(np.max(floor)))
 
 
-def _params(energy, curve, Lambda):
-    params = {"L": curve.length()}
+def _params(energy, curve, Lambda, constraints=(), mu=()):
+    params = {"L": curve.length(), "A": curve.area()}
     for t in energy.terms():
-        for name in ("alpha", "kstar", "eps", "beta", "L_star"):
+        for name in ("alpha", "kstar", "eps", "beta", "L_star", "p"):
             v = getattr(t, name, None)
             if isinstance(v, (int, float)) and name not in params:
                 params[name] = float(v)
     if "beta" in params and "L_star" in params:
         params["nu2"] = params["beta"] * (params["L"] - params["L_star"])
     params["nu1"] = float(-Lambda[2])
+    for con, m in zip(constraints, mu, strict=True):
+        params[f"mu_{con.symbol}"] = float(m)
     return params
 
 
-def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> PolishResult:
+def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
+           constraints=None) -> PolishResult:
     """Polish an approximate equilibrium by Newton's method on ``V^n = 0`` with closure.
 
     Parameters
@@ -276,22 +290,32 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
         Maximum number of Newton steps.
     line_search : bool
         Halve the step until the residual decreases (default True).
+    constraints : sequence of Constraint, optional
+        Exact constraints besides closure, e.g. ``[FixedLength(), FixedArea()]``
+        (:mod:`qsa.constraints`; a ``None`` target is the value of ``curve``). The
+        equations become ``V^n + sum_i mu_i n_i = 0`` with ``c_i = c_i*`` (``n_L = kappa``,
+        ``n_A = 1``), the multipliers ``mu_i`` unknowns of the Newton system
+        (:mod:`qsa.equilibria.constraint_terms`).
 
     Returns
     -------
     PolishResult
-        An :class:`Equilibrium` (``kind="polished"``) with ``residual = max|V^n|``,
+        An :class:`Equilibrium` (``kind="polished"``) with ``residual = max|V^n|``
+        (``max|V^n + sum_i mu_i n_i|`` with constraints),
         ``closure = |C(U)|``, ``multipliers`` (Lambda, by projection of
         ``nabla_I E`` on ``span Psi`` in ``<f, h> = int f h dsigma``), ``params``
         (``L``, the energy's parameters, ``nu1 = -Lambda_3``, ``nu2 = beta (L - L*)``
         when a perimeter term is present), plus ``status``, ``n_newton``, ``n_lu``, ``history``
-        (relative residual per iteration), ``unfolding``, ``noise_floor``. A solve
+        (relative residual per iteration), ``unfolding``, ``noise_floor``, and the
+        bound ``constraints`` with their ``constraint_multipliers`` (also in ``params``
+        as ``mu_L``, ``mu_A``: ``mu_A`` is the pressure holding the shape). A solve
         that does not converge returns ``success=False`` with the best state found.
 
     Raises
     ------
     ValueError
-        ``energy``/``curve`` of the wrong type, ``tol <= 0`` or ``maxiter < 0``.
+        ``energy``/``curve`` of the wrong type, ``tol <= 0``, ``maxiter < 0`` or bad
+        ``constraints``.
 
     Notes
     -----
@@ -309,12 +333,25 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
     >>> res = polish(eq.energy, eq.curve)
     >>> bool(res.success), res.residual < 1e-8 * res.residual_scale
     (True, True)
+
+    An inextensible ring under pressure relaxes to the circle of its length, with
+    ``mu_L = -R (p + eps / (2 R^3))`` (here ``R = 1``):
+
+    >>> import numpy as np
+    >>> from qsa.constraints import FixedLength
+    >>> from qsa.energies import CanhamHelfrich, Pressure
+    >>> c = Curve.polar(lambda t: 1 + 0.01 * np.cos(2 * t), Fourier(33))
+    >>> res = polish(CanhamHelfrich(1.0) + Pressure(-1.0), c,
+    ...              constraints=[FixedLength(2 * np.pi)])
+    >>> bool(res.success), round(res.params["L"] / np.pi, 10), round(res.params["mu_L"], 8)
+    (True, 2.0, 0.5)
     """
     _check_curve(energy, curve)
     tol = real_number(tol, "tol", positive=True)
     maxiter = integer(maxiter, "maxiter", minimum=0)
+    cons = bind_constraints(constraints, curve)
     guess = equal_arclength(curve)
-    system = EquilibriumSystem(energy, guess)
+    system = EquilibriumSystem(energy, guess, cons)
     run = newton_solve(system, system.pack(guess), tol, maxiter, line_search=line_search)
     return polish_result(energy, system, run, reparameterized=curve is not guess)
 
@@ -337,20 +374,29 @@ def polish_result(energy, system, run: NewtonRun, reparameterized=False) -> Poli
     """
     x, status = run.x, run.status
     c = system.curve(x)
+    cons = system.constraints
+    mu = np.array(system.constraint_multipliers(x), dtype=float)
     V = normal_velocity(energy, c)
+    if cons:
+        V = V + mu @ constraint_normals(cons, c)
     scale = residual_scale(energy, c)
     res = float(np.max(np.abs(V)))
     clo = float(np.linalg.norm(c.closure()))
-    Lambda = multipliers(energy, c)
-    msg = (f"{MESSAGES[status]}; {run.n_newton} Newton steps, max|V^n| = {res:.2e} "
+    Lambda = multipliers(energy, c, constraints=cons)[:3]
+    name = "max|V^n + mu.n|" if cons else "max|V^n|"
+    msg = (f"{MESSAGES[status]}; {run.n_newton} Newton steps, {name} = {res:.2e} "
            f"({res / scale:.1e} of the largest term), |C(U)| = {clo:.2e}, "
            f"round-off floor ~{run.noise_floor:.1e}")
+    if cons:
+        msg += "; " + ", ".join(f"{k.symbol} = {k.value(c):.10g} (mu_{k.symbol} = {m:.6g})"
+                                for k, m in zip(cons, mu, strict=True))
     if reparameterized:
         msg += "; the guess was reparameterized to constant g"
-    a = np.array(x[system.N + 1:], dtype=float)
-    unfolding = a if system.n_unfold == 3 else np.concatenate([a, [0.0]])
-    return PolishResult(c, energy, _params(energy, c, Lambda), Lambda, res, clo, scale,
+    a = np.array(system.unfolding(x), dtype=float)
+    unfolding = a if a.size == 3 else np.concatenate([a, [0.0]])
+    return PolishResult(c, energy, _params(energy, c, Lambda, cons, mu), Lambda, res, clo, scale,
                         kind="polished", success=status >= 0, message=msg, status=status,
                         n_newton=run.n_newton, n_lu=run.n_lu,
                         history=np.asarray(run.history, dtype=float), unfolding=unfolding,
-                        noise_floor=float(run.noise_floor))
+                        noise_floor=float(run.noise_floor), constraints=cons,
+                        constraint_multipliers=mu)

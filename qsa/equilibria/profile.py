@@ -3,7 +3,7 @@
 Section "Formal Equilibrium and Quasi-Steady Analysis" (e:psi_h and the 2N-front
 quasi-equilibrium ``psi_N``). With constant arc length ``g = L`` and arc length
 ``sigma = L s``, corner ``i`` is the arc ``[p_{2i-1}, p_{2i}]`` between an up-front and a
-down-front; the curvature is
+down-front; the curvature is ::
 
     psi_N(sigma) = sum_i [ psi~(y_i + a_i) - psi~(y_i - a_i) ],
 
@@ -23,7 +23,7 @@ section 5), as long as ``l1 > d_min``.
 in the positions and the residuals ``R_kappa``, ``R_g`` (in double precision, and
 ``R_kappa`` in mpmath arithmetic for the quartic well); :mod:`qsa.equilibria.splice`
 closes the positions and builds the :class:`~qsa.equilibria.result.Equilibrium`.
-Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term):
+Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term): ::
 
     R_kappa = -alpha^2 psi_N'' + W'(psi_N),   R_g = -alpha^2/2 psi_N'^2 + W(psi_N).
 """

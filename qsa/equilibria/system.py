@@ -36,7 +36,7 @@ Jacobian
 --------
 Exact derivatives of the *discrete* residual (verified against central
 differences in the tests). With ``mu = d_kappa E``, ``xi = g d_g E`` (``nabla_I E``
-in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``,
+in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``, ::
 
     V^n = (Delta_s + kappa^2) mu - kappa xi,
     dV^n/dkappa = (Delta_s + kappa^2) H_kk + diag(2 kappa mu - xi) - diag(kappa g) H_gk,
@@ -56,9 +56,16 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from qsa.constraints import constraint_normals
 from qsa.curve import Curve
 from qsa.discretize import FiniteDifference
 from qsa.energies.constrained import normal_velocity
+from qsa.equilibria.constraint_terms import (
+    area_energy_jacobian,
+    constraint_jacobian,
+    initial_multipliers,
+    split_area_energies,
+)
 from qsa.geometry import laplace_s
 from qsa.linalg import SparsePlusLowRank
 
@@ -156,6 +163,10 @@ class EquilibriumSystem:
     reference : Curve
         Initial guess with constant ``g``: supplies the grid, ``theta0``, ``gamma(0)``,
         the phase reference and the unfolding fields ``phi_j``.
+    constraints : sequence of Constraint, optional
+        Bound length / area constraints (:func:`qsa.constraints.bind_constraints`): one
+        multiplier ``mu_i`` (appended to the unknowns) and one equation each
+        (:mod:`qsa.equilibria.constraint_terms`).
 
     Examples
     --------
@@ -169,8 +180,14 @@ class EquilibriumSystem:
     (36, True, True)
     """
 
-    def __init__(self, energy, reference: Curve):
+    def __init__(self, energy, reference: Curve, constraints=()):
         self.energy = energy
+        self.constraints = tuple(constraints)
+        for con in self.constraints:
+            if con.target is None:
+                raise ValueError("constraints must be bound to a curve first "
+                                 "(qsa.constraints.bind_constraints)")
+        self.m = len(self.constraints)
         self.ref = reference
         self.grid = reference.grid
         self.N = reference.N
@@ -192,12 +209,29 @@ class EquilibriumSystem:
             self.phase_value = float(self.phase @ c.kappa)
         self.n_unfold = self.phi.shape[0]
         self._Cmat = None if self.grid.sparse else self.grid.cumulative_matrix()
-        self.size = N + 1 + self.n_unfold
+        self.size = N + 1 + self.n_unfold + self.m
 
     # state <-> curve
-    def pack(self, curve: Curve) -> np.ndarray:
-        """Unknowns ``x = [kappa (N,), L, a (n_unfold,)]`` of a constant-g curve, ``a = 0``."""
-        return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold)])
+    def pack(self, curve: Curve, mu=None) -> np.ndarray:
+        """Unknowns ``x = [kappa (N,), L, a (n_unfold,), mu (m,)]`` of a constant-g curve.
+
+        ``a = 0``; ``mu`` (the constraints' multipliers) defaults to the projection of
+        ``V^n`` of :attr:`energy` (:func:`~qsa.equilibria.constraint_terms.initial_multipliers`).
+        """
+        if mu is None:
+            mu = (initial_multipliers(self.constraints, curve,
+                                      normal_velocity(self.energy, curve))
+                  if self.m else np.zeros(0))
+        return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold),
+                               np.asarray(mu, dtype=float).reshape(self.m)])
+
+    def unfolding(self, x) -> np.ndarray:
+        """The unfolding parameters ``a`` of unknowns ``x``, shape (n_unfold,)."""
+        return np.asarray(x[self.N + 1: self.N + 1 + self.n_unfold])
+
+    def constraint_multipliers(self, x) -> np.ndarray:
+        """The multipliers ``mu`` of the constraints in unknowns ``x``, shape (m,)."""
+        return np.asarray(x[self.size - self.m:])
 
     def curve(self, x) -> Curve:
         """The :class:`~qsa.curve.Curve` of unknowns ``x`` (``g = L``, reference base point)."""
@@ -205,7 +239,7 @@ class EquilibriumSystem:
         return Curve(x[:N], x[N], self.grid, self.ref.theta0, self.ref.origin)
 
     def residual(self, x, energy=None) -> np.ndarray:
-        """``F(x)``, shape (size,): ``[V^n + a.phi, C, phase]``.
+        """``F(x)``, shape (size,): ``[V^n + a.phi + mu.n, C, phase, c - c*]``.
 
         Parameters
         ----------
@@ -221,15 +255,21 @@ class EquilibriumSystem:
         energy = self.energy if energy is None else energy
         N = self.N
         c = self.curve(x)
-        a = x[N + 1:]
-        V = normal_velocity(energy, c) + a @ self.phi
+        V = normal_velocity(energy, c) + self.unfolding(x) @ self.phi
+        if self.m:
+            V = V + self.constraint_multipliers(x) @ constraint_normals(self.constraints, c)
         parts = [V, c.closure()]
         if self.phase is not None:
             parts.append([self.phase @ x[:N] - self.phase_value])
+        parts.append([con.defect(c) for con in self.constraints])
         return np.concatenate(parts)
 
+    def _constraint_rows(self):
+        """Index of the first constraint row of ``F``."""
+        return self.N + 3 + (self.phase is not None)
+
     def scaled_parts(self, F, c: Curve, scale: float) -> np.ndarray:
-        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,).
+        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|, max |c - c*| / |c*|)``, (4,).
 
         Parameters
         ----------
@@ -242,15 +282,21 @@ class EquilibriumSystem:
 
         Returns
         -------
-        ndarray, shape (3,)
+        ndarray, shape (4,)
         """
         N = self.N
-        out = np.zeros(3)
+        out = np.zeros(4)
         out[0] = np.max(np.abs(F[:N])) / scale
         out[1] = np.linalg.norm(F[N:N + 3]) / c.length()
         if self.phase is not None:
             out[2] = abs(F[N + 3]) / max(np.max(np.abs(c.kappa)), 1.0)
+        if self.m:
+            out[3] = np.max(np.abs(self._scaled_defects(F)))
         return out
+
+    def _scaled_defects(self, F):
+        r = self._constraint_rows()
+        return F[r:r + self.m] / np.array([abs(con.target) for con in self.constraints])
 
     def merit(self, F, c: Curve, scale: float) -> float:
         """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows).
@@ -268,6 +314,8 @@ class EquilibriumSystem:
         m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
         if self.phase is not None:
             m += (F[N + 3] / max(np.max(np.abs(c.kappa)), 1.0)) ** 2
+        if self.m:
+            m += np.sum(self._scaled_defects(F) ** 2)
         return float(np.sqrt(m))
 
     def scaled_norm(self, F, c: Curve, scale: float) -> float:
@@ -292,13 +340,14 @@ class EquilibriumSystem:
         A : matrix (N, N)
             ``dV^n/dkappa`` (sparse for finite differences, dense for Fourier).
         B : ndarray (N, m)
-            Columns ``dV^n/dL`` and ``phi_j``.
+            Columns ``dV^n/dL``, ``phi_j`` and ``n_i`` (the constraints' multipliers).
         Crows : ndarray (m', N)
-            Closure (and phase) rows, derivatives w.r.t. kappa.
+            Closure (phase, constraint) rows, derivatives w.r.t. kappa.
         D : ndarray (m', m)
-            Their derivatives w.r.t. ``(L, a)``.
+            Their derivatives w.r.t. ``(L, a, mu)``.
         low : list of (P, Q)
-            Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians).
+            Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians and
+            area penalties).
         """
         energy = self.energy if energy is None else energy
         N = self.N
@@ -306,24 +355,37 @@ class EquilibriumSystem:
         c = self.curve(x)
         L = x[N]
         k = c.kappa
-        grad = energy.gradient(c)
-        mu, xi = grad[:N], L * grad[N:]
-        H = energy.hessian(c)
-        Hkk, Hgk, Hcol, lowH = _blocks(H, N)
         lap = laplace_s(c)
         Gm = lap + grid.diag(k**2)  # = -G
         diag = grid.diag
-        A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
+        # area energies have the exact constant V^n = -F'(A): their own derivatives
+        rest, area_terms = split_area_energies(energy)
         low = []
-        if lowH is not None:
-            Pk, Pg, Q = lowH
-            low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
+        if rest is not None:
+            grad = rest.gradient(c)
+            mu, xi = grad[:N], L * grad[N:]
+            H = rest.hessian(c)
+            Hkk, Hgk, Hcol, lowH = _blocks(H, N)
+            A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
+            if lowH is not None:
+                Pk, Pg, Q = lowH
+                low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
+            dmu = Hcol[:N] - mu / L
+            dxi = L * Hcol[N:]
+            VL = Gm @ dmu - (2.0 / L) * (lap @ mu) - k * dxi
+        else:
+            A = diag(np.zeros(N))
+            VL = np.zeros(N)
+        low_area, VL_area = area_energy_jacobian(area_terms, c)
+        if low_area is not None:
+            low.append(low_area)
+        VL = VL + VL_area
+        cj = constraint_jacobian(self.constraints, c, self.constraint_multipliers(x))
+        if np.any(cj.diagonal != 0):
+            A = A + diag(cj.diagonal)
         if sp.issparse(A):
             A = A.tocsr()
-        dmu = Hcol[:N] - mu / L
-        dxi = L * Hcol[N:]
-        VL = Gm @ dmu - (2.0 / L) * (lap @ mu) - k * dxi
-        B = np.column_stack([VL, self.phi.T])
+        B = np.column_stack([VL, self.phi.T, cj.columns])
         # closure rows: exact derivatives of the quadrature of C
         w = grid.weights
         th = c.theta()
@@ -337,6 +399,8 @@ class EquilibriumSystem:
         if self.phase is not None:
             rows.append(self.phase)
             dL.append(0.0)
+        rows.extend(cj.rows)
+        dL.extend(cj.dL)
         Crows = np.array(rows)
         D = np.zeros((len(rows), m))
         D[:, 0] = dL

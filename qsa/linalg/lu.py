@@ -218,7 +218,7 @@ class LowRankUpdate:
     ``E_R`` and ``E_K`` are the columns of the identity at ``rows`` (``r`` of them) and
     ``cols``: the update is the dense block ``C`` in those rows and columns. With
     ``Z = A^{-1} E_R`` (``r`` solves) and the capacitance ``S = I + C Z[cols]`` (dense
-    LU, ``r^3/3`` flops),
+    LU, ``r^3/3`` flops), ::
 
         x0 = A^{-1} b,   w = S^{-1} C x0[cols],   x = x0 - Z w = A^{-1} (b - E_R w).
 
