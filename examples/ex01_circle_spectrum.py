@@ -1,4 +1,6 @@
-"""The spectrum of J on a faceting circle against its closed form (MATH.md section 4).
+"""The spectrum of J on a faceting circle against its closed form.
+
+The closed form is in the Conventions and errata page, section 4.
 
 The circle of radius R is an equilibrium of ``Faceting(alpha, kstar) + Perimeter(beta,
 L*)`` for ``beta (2 pi R - L*) = W'(1/R)/R - W(1/R)``. For the normal mode ``cos k theta``
@@ -33,7 +35,7 @@ FD_MODES = (0, 2, 3, 4, 5)
 
 
 def exact_modes(kmax, R=R, alpha=ALPHA, kstar=KSTAR, beta=BETA):
-    """``lambda_k`` for ``k = 0..kmax`` (MATH.md section 4), shape ``(kmax + 1,)``."""
+    """``lambda_k`` for ``k = 0..kmax``, shape ``(kmax + 1,)`` (Conventions and errata, sec. 4)."""
     W2 = float(DoubleWell(kstar).d2W(1.0 / R))
     k = np.arange(kmax + 1)
     lam = -((k**2 - 1.0) ** 2 / R**4) * (alpha**2 * k**2 / R**2 + W2)

@@ -1,7 +1,7 @@
 """N-pulse faceted equilibria for N = 2..6 at alpha = 0.1 and their unstable counts.
 
-Each N-pulse of ``Faceting(alpha, kstar=5) + Perimeter(beta=5, L*)`` (MATH.md section
-5; exists iff ``N alpha < 1`` for the quartic well) is built from one periodic orbit of
+Each N-pulse of ``Faceting(alpha, kstar=5) + Perimeter(beta=5, L*)`` (Conventions and errata,
+section 5; exists iff ``N alpha < 1`` for the quartic well) is built from one periodic orbit of
 ``alpha^2 psi'' - W'(psi) = nu1`` on a Fourier grid resolving its fronts; ``L*`` is the
 perimeter target that makes it an exact equilibrium. With ``nu1 = 0`` and the
 symmetric well each pulse spends half its period ``T`` at ``kappa ~ kstar``, so the

@@ -1,7 +1,7 @@
 """Spectral dichotomy of a heteroclinic splice: small eigenvalues ~ exp(-kstar d_min/(sqrt2 alpha)).
 
-A splice (MATH.md section 5) glues heteroclinic fronts into a rounded triangle: three
-corners of turning ``2 pi / 3`` (arcs of curvature ``kstar``, length
+A splice (Conventions and errata, section 5) glues heteroclinic fronts into a rounded
+triangle: three corners of turning ``2 pi / 3`` (arcs of curvature ``kstar``, length
 ``d_min = 2 pi / (3 kstar)``, the shortest distance between two fronts) joined by facets
 of lengths close to ``1, 1.3, 1``. It is a quasi-equilibrium: its residual, and so the
 ``2 * 3 - 1 = 5`` small eigenvalues of J (front motions that keep the closure; J in

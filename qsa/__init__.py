@@ -3,6 +3,9 @@
 The mathematics is Nguyen, Promislow & Wetton, "Quasisteady patterns in
 interfaces: folding and faceting"; conventions and corrections of its printed
 formulas are cited in each module (``# NOTE:`` marks a departure from the paper).
+References of the form "Conventions and errata, section N" are to the page of
+that name in the documentation, which lists every convention and every erratum
+of the paper with the test that guards it.
 
 Examples
 --------

@@ -7,7 +7,7 @@ Everything else is derived (paper section 2, e:tau-n, e:theta-kappa, e:C1-e:C2):
 
 * ``theta = theta0 + D kappa``, with ``D f = int_0^s f dsigma``;
 * ``tau = (cos theta, sin theta)``, ``n = (sin theta, -cos theta)`` (outward for
-  counter-clockwise curves, MATH.md section 1);
+  counter-clockwise curves, Conventions and errata, section 1);
 * ``gamma = gamma0 + D tau``;
 * the closure ``C(U) = (int tau dsigma, int kappa dsigma - 2 pi)``.
 

@@ -10,7 +10,7 @@ Two discretizations share one interface:
 ``Fourier(N)``
     Pseudo-spectral differentiation on N equispaced nodes (odd N only: with even
     N the derivative annihilates the Nyquist mode, which then shows up as a fake
-    eigenvalue, MATH.md section 4). Operators are dense ``ndarray``.
+    eigenvalue, Conventions and errata, section 4). Operators are dense ``ndarray``.
 
 Besides the nodal derivative, each grid exposes an *edge* pair used by energies
 that contain ``|grad_s kappa|^2``: ``edge_difference`` (nodes -> edges) and
@@ -532,7 +532,7 @@ class Fourier(Grid):
     N : int
         Number of nodes; odd and ``>= 9``. Even N is refused: the spectral
         derivative then annihilates the Nyquist mode, which would appear as a
-        spurious eigenvalue (MATH.md section 4).
+        spurious eigenvalue (Conventions and errata, section 4).
 
     Examples
     --------

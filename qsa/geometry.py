@@ -1,6 +1,6 @@
 """Operators of the intrinsic formulation: M, its dsigma-adjoint, kernels, constraint Hessians.
 
-All adjoints are taken in ``<f, h> = int f h dsigma`` (MATH.md section 1); the
+All adjoints are taken in ``<f, h> = int f h dsigma`` (Conventions and errata, section 1); the
 discrete adjoint of a matrix ``A`` is ``W^{-1} A^T W`` with ``W = diag(dsigma)``
 (block-diagonal on stacked ``[kappa, g]``).
 
@@ -16,7 +16,7 @@ Discrete operators (finite differences use the paper's second-order stencils):
 Notes
 -----
 Equations: e:Meq, e:FSFF (M), e:CVE (M-dagger), lem:kerM (rigid motions),
-e:Psi1-e:Psi3 (Psi, in the position form of MATH.md section 2), e:cC-Hessian
+e:Psi1-e:Psi3 (Psi, in the position form of Conventions and errata, section 2), e:cC-Hessian
 and e:cC-Hessian3 (constraint Hessians; the printed ones are wrong, see the
 NOTE in :func:`constraint_hessians`).
 """
@@ -253,7 +253,7 @@ def MMdagger(c: Curve):
     """The geometric prefactor ``M M-dagger`` built as the product.
 
     # NOTE: the paper's printed MM-dagger display has wrong (2,1) and (2,2)
-    # entries (MATH.md section 2); the product is exact by construction.
+    # entries (Conventions and errata, section 2); the product is exact by construction.
 
     Parameters
     ----------
@@ -345,7 +345,8 @@ def constraint_gradients(c: Curve) -> np.ndarray:
 
     Notes
     -----
-    # NOTE: position form (MATH.md section 2): Psi1 = (y - y0, (kappa (y - y0) + tau_x)/g),
+    # NOTE: position form (Conventions and errata, section 2):
+    # Psi1 = (y - y0, (kappa (y - y0) + tau_x)/g),
     # Psi2 = (-(x - x0), (-kappa (x - x0) + tau_y)/g), Psi3 = (1, kappa/g). It equals
     # the paper's D-dagger form e:Psi1-e:Psi2 on closed curves but, unlike it, converges
     # with second-order differences -- with the positions' closure gap spread over S
@@ -453,7 +454,7 @@ def constraint_hessians(c: Curve) -> list:
 
     Notes
     -----
-    # NOTE: e:cC-Hessian and e:cC-Hessian3 as printed are wrong (MATH.md section 4).
+    # NOTE: e:cC-Hessian and e:cC-Hessian3 as printed are wrong (Conventions and errata, section 4).
     # Implemented: H_C3 = [[0, 1/g], [1/g, 0]], and for j = 1, 2 with
     # eta = kappa1 + kappa g1/g, B = D-dagger(tau'_j g1/g), C = D-dagger(tau_j D eta):
     #   (H_Cj U1)_kappa = (g1/g) D-dagger tau'_j + B - C,

@@ -33,9 +33,9 @@ and the fields are exactly its partial derivatives:
 
 Notes
 -----
-MATH.md section 3 (kernel and its derivative) and section 6 (rigid-invariance
+Conventions and errata, section 3 (kernel and its derivative) and section 6 (rigid-invariance
 identities). The printed closed forms for the near-contact force and ``B(0)``
-are off by factors 8 and 4 (MATH.md section 6); nothing here uses them.
+are off by factors 8 and 4 (Conventions and errata, section 6); nothing here uses them.
 """
 
 from __future__ import annotations
@@ -87,7 +87,7 @@ class AdhesionKernel:
     Notes
     -----
     The argument ``l`` is the *squared* distance ``|d|^2``; ``dA`` and ``d2A``
-    are derivatives with respect to ``l`` (MATH.md section 3).
+    are derivatives with respect to ``l`` (Conventions and errata, section 3).
 
     Examples
     --------
@@ -225,7 +225,9 @@ class AdhesionKernel:
 
     @property
     def pair_separation(self) -> float:
-        """Optimal separation of two parallel strands, ``l* sqrt(a^2 + 1/2)`` (MATH.md 6).
+        """Optimal separation of two parallel strands, ``l* sqrt(a^2 + 1/2)``.
+
+        Conventions and errata, section 6.
 
         Examples
         --------
@@ -561,7 +563,7 @@ def adhesion_normal_velocity(kernel, x, y, nx, ny, kappa, w, *, pairs=None,
     ``(force . n + kappa B, 0)`` is the extrinsic L^2(dsigma) gradient
     (e:Adh-Ex_grad); rigid invariance makes it orthogonal to the rigid normal
     velocities ``e_k . n`` and ``gamma . tau`` in ``<f, h> = int f h dsigma``
-    (MATH.md section 6).
+    (Conventions and errata, section 6).
 
     Parameters
     ----------
@@ -742,7 +744,7 @@ class Adhesion(Energy):
         Screening length, ``> 0``.
     a : float
         Shape parameter: ``A`` changes sign at ``|d| = a l_star``; paired sheets
-        settle at the separation ``l_star sqrt(a^2 + 1/2)`` (MATH.md section 6).
+        settle at the separation ``l_star sqrt(a^2 + 1/2)`` (Conventions and errata, section 6).
     method : {"neighbours", "dense"}
         Cutoff neighbour list (O(N) for a short-range kernel) or all pairs.
 

@@ -22,7 +22,7 @@ and the Euclidean Hessian is ``T^T B T`` with ``T = [[E, 0], [A, 0], [0, A]]`` a
 the 3x3 block of diagonals ``B = w * d^2 Phi``. The ``<.,.>`` gradient and
 Hessian divide rows by ``dsigma``. In the continuum these are e:FoE_IG,
 ``nabla_I E = (-nabla_s F_1 + F_0, (-F_1 nabla_s kappa + F)/g)``, and e:cF-Hessian
-(MATH.md: that printed Hessian is right).
+(Conventions and errata, section 4: that printed Hessian is right).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ length, ``' = d/dsigma``; e:Facet-CP with ``nu1 = 0``) and connects the wells,
 
     sigma(psi) = int_{kstar/2}^{psi} alpha / sqrt(2 W(p)) dp.
 
-For the quartic ``W = k^2 (k - kstar)^2 / 4`` this is the closed form (MATH.md
+For the quartic ``W = k^2 (k - kstar)^2 / 4`` this is the closed form (Conventions and errata,
 section 5)
 
     psi_h(sigma) = kstar / (1 + exp(-kstar sigma / (sqrt(2) alpha))),
@@ -312,7 +312,7 @@ def heteroclinic(alpha, well=None, kstar=None) -> Heteroclinic:
     Notes
     -----
     Section "Formal Equilibrium and Quasi-Steady Analysis", e:Facet-CP and
-    e:Fint with ``nu1 = nu2 = 0``; closed form from MATH.md section 5.
+    e:Fint with ``nu1 = nu2 = 0``; closed form from Conventions and errata, section 5.
 
     Examples
     --------

@@ -23,7 +23,7 @@ Unknowns and equations (``N + 4`` each)::
 with unknowns ``x = (kappa, L, a_1, a_2, a_3)``. The unfolding fields ``phi_j`` are the
 normal components of the rigid motions of the initial guess (``e1.n``, ``e2.n``,
 ``(gamma - gamma_c).tau``): on closed curves ``<V^n, phi_j> = 0`` identically
-(``ker M-dagger`` argument, MATH.md section 2), so the ``N + 3`` equations for
+(``ker M-dagger`` argument, Conventions and errata, section 2), so the ``N + 3`` equations for
 ``N + 1`` unknowns are consistent but carry three redundancies; the unfolding
 parameters ``a_j`` make the system square and are zero at the solution (their
 size is reported: it measures how well the discrete identities hold). For

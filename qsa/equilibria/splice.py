@@ -16,7 +16,7 @@ corner turns by exactly ``kstar (p_{2i} - p_{2i-1})``.
 
 NOTE: the paper cuts off at ``|s| in [alpha l, 2 alpha l]``, which shrinks with alpha
 and leaves an alpha-independent error; with a fixed cutoff the residuals scale like
-``exp(-kstar d_min / (sqrt(2) alpha))``, d_min the smallest front spacing (MATH.md
+``exp(-kstar d_min / (sqrt(2) alpha))``, d_min the smallest front spacing (Conventions and errata,
 section 5), as long as ``l1 > d_min``.
 
 Constraints and free parameters: the total turning ``kstar sum (p_{2i} - p_{2i-1}) =

@@ -32,7 +32,7 @@ most ``tol``, advancing physical time by ``2k``; the next ``k`` is
 halves the step (as the paper's code does).
 
 NOTE: the paper's code advances its clock by ``k`` per accepted pass while the
-state advances by ``2k`` (MATH.md section 7); here the clock is physical time.
+state advances by ``2k`` (Conventions and errata, section 7); here the clock is physical time.
 """
 
 from __future__ import annotations

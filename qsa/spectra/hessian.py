@@ -10,7 +10,7 @@ not of ``nabla_I^2 E`` alone (e:cF-Hessian is the energy part; the constraint
 Hessians e:cC-Hessian, e:cC-Hessian3 are taken from :mod:`qsa.geometry`, which
 implements their corrected form).
 
-# NOTE: the paper linearizes with ``nabla^2 E`` (e:FOE-Lin); MATH.md section 4 shows
+# NOTE: the paper linearizes with ``nabla^2 E`` (e:FOE-Lin); Conventions and errata, section 4 shows
 # that this is only right when ``Lambda = 0`` and that the correct operator is
 # ``L_Lambda``. Both are available here and in :mod:`qsa.spectra.linearization`.
 
@@ -218,9 +218,9 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
         ``"auto"`` (default): ``C_3`` always; ``C_1, C_2`` only when significant,
         ``|Lambda_j Psi_j| > max(|nabla_I E - Lambda . Psi|, 1e-8 |nabla_I E|)`` (else
         the term is below the accuracy of the projection itself; for the local
-        energies here ``Lambda_{1,2} = 0`` at equilibria, MATH.md section 4). If they
-        are significant on a sparse grid with ``N >`` :data:`DENSE_CONSTRAINT_LIMIT`,
-        a ``ValueError`` is raised (use ``"all"``).
+        energies here ``Lambda_{1,2} = 0`` at equilibria, Conventions and errata,
+        section 4). If they are significant on a sparse grid with
+        ``N >`` :data:`DENSE_CONSTRAINT_LIMIT`, a ``ValueError`` is raised (use ``"all"``).
 
     Returns
     -------
@@ -231,7 +231,7 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     Notes
     -----
     ``Lambda`` is the ``<.,.>``-least-squares solution of ``nabla_I E = Lambda . Psi``
-    (MATH.md section 4); e:Abs-CP, e:cF-Hessian, e:cC-Hessian, e:cC-Hessian3.
+    (Conventions and errata, section 4); e:Abs-CP, e:cF-Hessian, e:cC-Hessian, e:cC-Hessian3.
 
     Examples
     --------

@@ -138,7 +138,7 @@ def test_stability_true_uses_spectra_or_says_it_is_missing():
             continuation(*args, stability=True)
         return
     b = continuation(*args, stability=True)
-    # circle spectrum (MATH.md section 4): mode k >= 2 (double) is unstable when
+    # circle spectrum (Conventions and errata, section 4): mode k >= 2 (double) is unstable when
     # alpha^2 k^2 k0^2 + W''(k0) < 0, mode 0 when k0^3 W''(k0) + 2 pi beta < 0
     for p in b.points:
         k0 = p.curve.kappa[0]

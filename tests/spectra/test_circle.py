@@ -1,4 +1,4 @@
-"""Circle spectra against the closed form of MATH.md section 4 (all gauges, both grids)."""
+"""Circle spectra against the closed form (Conventions, section 4), all gauges, both grids."""
 
 import numpy as np
 import pytest
@@ -94,7 +94,7 @@ def test_paper_gauge_has_spurious_positive_eigenvalues_on_a_stable_circle():
 
     R = 1, alpha = 0.1, kstar = 5, beta = 5 (Fourier(65)): the true spectrum (J, or the
     comoving -M M-dagger L_Lambda) is <= 0, while the paper's operator has 62 positive
-    eigenvalues, the largest +3427.6 (the value MATH.md section 4 quotes as ~3.4e3).
+    eigenvalues, the largest +3427.6 (the value Conventions and errata, section 4 quotes as ~3.4e3).
     """
     eq = circle(1.0, 0.1, grid=Fourier(65), beta=5.0, kstar=5.0)
     true = spectrum(eq.energy, eq.curve, gauge="comoving", reject_spurious=False)
