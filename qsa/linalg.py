@@ -437,6 +437,14 @@ class ReducedHessian:
             if other.shape != self.shape:
                 raise ValueError(f"shapes {self.shape} and {other.shape} do not match")
             bd = lambda a, b: sp.block_diag([a, b], format="csr")
+            if _same(self.left, other.left) and _same(self.right, other.right):
+                # one core on the same unknowns: stack the states, keep Lf and Rf (so a
+                # diagonal scaling stays diagonal and augmented() stays compact)
+                return ReducedHessian(self.Luu + other.Luu, sp.vstack([self.Lyu, other.Lyu]),
+                                      bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
+                                      sp.vstack([self.cU, other.cU]), self.left, self.right,
+                                      self.S + other.S, np.hstack([self.U, other.U]),
+                                      np.hstack([self.V, other.V]))
             return ReducedHessian(bd(self.Luu, other.Luu), bd(self.Lyu, other.Lyu),
                                   bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
                                   bd(self.cU, other.cU), sp.hstack([self.left, other.left]),
@@ -472,6 +480,11 @@ class ReducedHessian:
     def __repr__(self):
         return (f"ReducedHessian(shape={self.shape}, state={self.cY.shape[0]}, nnz={self.nnz}, "
                 f"rank={self.U.shape[1]})")
+
+
+def _same(A, B) -> bool:
+    """Whether two sparse matrices are equal entry by entry."""
+    return A.shape == B.shape and (A != B).nnz == 0
 
 
 def to_dense(A) -> np.ndarray:

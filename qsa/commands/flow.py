@@ -95,7 +95,7 @@ def summarize(res):
         "success": bool(res.success), "status": int(res.status), "message": res.message,
         "method": res.method, "tol": res.tol, "N": res.N, "t_final": float(res.t[-1]),
         "n_steps": res.n_steps, "n_rejected": res.n_rejected, "n_newton": res.n_newton,
-        "n_factorizations": res.n_factorizations, "energy_initial": float(res.energy_steps[0]),
+        "n_lu": res.n_lu, "energy_initial": float(res.energy_steps[0]),
         "energy_final": float(res.energy_steps[-1]), "length_final": float(res.length_steps[-1]),
         "checkpoint": res.checkpoint, "model": res.system.metadata(),
     }
@@ -138,7 +138,7 @@ def run(args):
         print(f"{summary['model']['model']} N={res.N} {res.method} tol={res.tol:g}: "
               f"{res.message} t={summary['t_final']:.6g}, {res.n_steps} steps "
               f"({res.n_rejected} rejected), {res.n_newton} Newton iterations, "
-              f"{res.n_factorizations} factorizations; energy {summary['energy_initial']:.6g}"
+              f"{res.n_lu} factorizations; energy {summary['energy_initial']:.6g}"
               f" -> {summary['energy_final']:.6g}")
         if args.out:
             print(f"data and figure written to {args.out}/")

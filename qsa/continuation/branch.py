@@ -14,7 +14,18 @@ import numpy as np
 
 from qsa.curve import Curve
 
-__all__ = ["Branch", "BranchPoint", "Fold"]
+__all__ = ["Branch", "BranchPoint", "Fold", "MESSAGES"]
+
+#: Meaning of :attr:`Branch.status` (0 success, positive: success with a caveat,
+#: negative: failure); :attr:`Branch.message` starts with the entry.
+MESSAGES = {
+    0: "range covered",
+    -1: "the step size fell below ds_min (corrector failures)",
+    -2: "max_steps reached before the end of the range",
+    -3: "natural continuation stopped: Newton failed (a fold is likely; use "
+        "method='pseudo-arclength')",
+    -4: "singular tangent system",
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,12 +129,17 @@ class Branch:
         ``i + 1`` without a fold (possible bifurcations).
     method : str
     success : bool
-        Whether the requested range was covered.
+        Whether the requested range was covered (``status >= 0``).
     status : int
-        0 range covered, 1 ``max_steps`` reached, 2 step size below ``ds_min``
-        (corrector failures), 3 natural continuation stopped (fold or failure).
+        A key of :data:`MESSAGES`: 0 range covered, -1 step size below ``ds_min``
+        (corrector failures), -2 ``max_steps`` reached, -3 natural continuation
+        stopped (fold or failure), -4 singular tangent system.
     message : str
+        Starts with ``MESSAGES[status]``; then where it stopped, folds and sign changes.
     n_steps, n_rejected : int
+        Accepted continuation steps and rejected (corrector-failed) attempts.
+    n_newton : int
+        Newton (corrector) iterations over the accepted points.
 
     Parameters
     ----------
@@ -151,6 +167,7 @@ class Branch:
     message: str
     n_steps: int = 0
     n_rejected: int = 0
+    n_newton: int = 0
     extra: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -184,6 +201,8 @@ class Branch:
         return {
             "param": self.param, "method": self.method, "success": bool(self.success),
             "status": int(self.status), "message": self.message,
+            "n_steps": int(self.n_steps), "n_rejected": int(self.n_rejected),
+            "n_newton": int(self.n_newton),
             "values": [float(v) for v in self.values],
             "L": [float(v) for v in self.lengths],
             "folds": [{"param": float(f.param), "index": int(f.index), "L": float(f.L)}

@@ -30,16 +30,17 @@ import numpy as np
 
 from qsa import spectra
 from qsa._checks import integer, real_number
-from qsa.continuation.branch import Branch, BranchPoint, Fold
+from qsa.continuation.branch import MESSAGES, Branch, BranchPoint, Fold
 from qsa.curve import Curve
 from qsa.energies import residual_scale
 from qsa.equilibria.newton import (
     EquilibriumSystem,
+    NewtonRun,
     _assemble,
     _equal_arclength,
     _Factor,
-    _result,
     newton_solve,
+    polish_result,
 )
 
 __all__ = ["continuation"]
@@ -168,11 +169,11 @@ def _corrector(prob, y_pred, t, tol, maxiter):
     return y, False, maxiter
 
 
-def _point(prob, y, dp_ds, det_sign, hook, status=0, history=(), n_iter=0):
+def _point(prob, y, dp_ds, det_sign, hook, status=0, history=(), n_newton=0, n_lu=0):
     n = y.size - 1
     energy = prob.factory(y[-1])
-    eq = _result(energy, prob.system, y[:n], status, np.asarray(history, dtype=float), n_iter,
-                 0.0)
+    run = NewtonRun(y[:n], status, np.asarray(history, dtype=float), n_newton, n_lu, 0.0)
+    eq = polish_result(energy, prob.system, run)
     nu = hook(energy, eq.curve) if hook is not None else None
     return BranchPoint(float(y[-1]), eq, float(dp_ds), int(det_sign), nu)
 
@@ -274,14 +275,14 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     p0 = float(vals[0])
     guess = _equal_arclength(curve)
     prob = _Problem(energy_factory, guess, p0)
-    x, status, hist, nit, floor = newton_solve(prob.system, prob.system.pack(guess), tol,
-                                               max(maxiter, 30), energy=energy_factory(p0))
-    if status not in (0, 1):
+    run = newton_solve(prob.system, prob.system.pack(guess), tol, max(maxiter, 30),
+                       energy=energy_factory(p0))
+    if not run.success:
         raise ValueError(f"curve is not close enough to an equilibrium at {param}={p0}: "
-                         f"Newton stopped with relative residual {hist[-1]:.2e}")
+                         f"Newton stopped with relative residual {run.history[-1]:.2e}")
     if method == "natural":
-        return _natural(energy_factory, prob, x, vals, param, tol, maxiter, hook)
-    return _arclength(energy_factory, prob, x, vals, step, param, tol, maxiter, max_steps,
+        return _natural(energy_factory, prob, run.x, vals, param, tol, maxiter, hook)
+    return _arclength(energy_factory, prob, run.x, vals, step, param, tol, maxiter, max_steps,
                       ds_max, ds_min, hook, refine_folds)
 
 
@@ -290,8 +291,8 @@ def _natural(factory, prob, x, vals, param, tol, maxiter, hook):
     det = _Factor(prob.system.jacobian(x, factory(vals[0]))).det_sign()
     points.append(_point(prob, np.append(x, vals[0]), np.nan, det, hook))
     xs = [x]
-    status, msg = 0, f"natural continuation in {param}: range covered"
-    n_rej = 0
+    status, msg = 0, f"{MESSAGES[0]} (natural continuation in {param})"
+    n_rej = n_newton = 0
     for k in range(1, len(vals)):
         p = float(vals[k])
         prob = _Problem(factory, points[-1].curve, float(vals[k - 1]))
@@ -302,25 +303,27 @@ def _natural(factory, prob, x, vals, param, tol, maxiter, hook):
             pred[: prob.N + 1] += frac * (xs[-1][: prob.N + 1] - xs[-2][: prob.N + 1])
         else:
             pred = xprev
-        xn, st, hist, nit, floor = newton_solve(prob.system, pred, tol, maxiter,
-                                                energy=factory(p))
-        if st not in (0, 1):
+        run = newton_solve(prob.system, pred, tol, maxiter, energy=factory(p))
+        if not run.success:
             n_rej += 1
-            status = 3
-            msg = (f"natural continuation in {param} stopped at {param}={p:.8g}: Newton "
-                   f"failed (relative residual {hist.min():.2e}); a fold between "
-                   f"{vals[k - 1]:.8g} and {p:.8g} is likely -- use method='pseudo-arclength'")
+            status = -3
+            msg = (f"{MESSAGES[-3]}: at {param}={p:.8g} (relative residual "
+                   f"{run.history.min():.2e}); the fold lies between {vals[k - 1]:.8g} "
+                   f"and {p:.8g}")
             break
+        n_newton += run.n_newton
+        xn = run.x
         det = _Factor(prob.system.jacobian(xn, factory(p))).det_sign()
-        points.append(_point(prob, np.append(xn, p), np.nan, det, hook, st, hist, nit))
+        points.append(_point(prob, np.append(xn, p), np.nan, det, hook, run.status,
+                             run.history, run.n_newton, run.n_lu))
         xs.append(xn)
     bps = tuple(i for i in range(len(points) - 1)
                 if points[i].det_sign != points[i + 1].det_sign)
     if bps:
         msg += (f"; det F_x changes sign after point(s) {list(bps)} (a fold or branch "
                 "point)")
-    return Branch(param, tuple(points), (), bps, "natural", status == 0, status, msg,
-                  len(points) - 1, n_rej)
+    return Branch(param, tuple(points), (), bps, "natural", status >= 0, status, msg,
+                  len(points) - 1, n_rej, n_newton)
 
 
 def _arclength(factory, prob, x, vals, step, param, tol, maxiter, max_steps, ds_max, ds_min,
@@ -337,7 +340,7 @@ def _arclength(factory, prob, x, vals, step, param, tol, maxiter, max_steps, ds_
     points = [_point(prob, y, t[-1], det, hook)]
     tangents = [t]
     probs = [prob]
-    status, n_rej, steps = 1, 0, 0
+    status, n_rej, steps, n_newton = -2, 0, 0, 0
     msg = ""
     while steps < max_steps:
         y_pred = y + ds * t
@@ -346,9 +349,8 @@ def _arclength(factory, prob, x, vals, step, param, tol, maxiter, max_steps, ds_
             n_rej += 1
             ds *= 0.5
             if ds < ds_min:
-                status = 2
-                msg = (f"step size fell below ds_min={ds_min:.2e} at {param}="
-                       f"{y[-1]:.8g} (corrector failures)")
+                status = -1
+                msg = f"{MESSAGES[-1]}: ds_min={ds_min:.2e} at {param}={y[-1]:.8g}"
                 break
             continue
         steps += 1
@@ -359,21 +361,23 @@ def _arclength(factory, prob, x, vals, step, param, tol, maxiter, max_steps, ds_
         try:
             t_new, det = _tangent(prob, y_new[:n], y_new[-1], t)
         except (np.linalg.LinAlgError, RuntimeError):
-            status = 2
-            msg = f"singular tangent system at {param}={y_new[-1]:.8g}"
+            status = -4
+            msg = f"{MESSAGES[-4]} at {param}={y_new[-1]:.8g}"
             break
         y, t = y_new, t_new
-        points.append(_point(prob, y, t[-1], det, hook, 0, (), its))
+        n_newton += its
+        points.append(_point(prob, y, t[-1], det, hook, 0, (), its, its))
         tangents.append(t)
         probs.append(prob)
         if its <= 3:
             ds = min(1.5 * ds, ds_max)
         if not (lo - 1e-12 <= y[-1] <= hi + 1e-12):
             status = 0
-            msg = f"pseudo-arclength continuation in {param}: left [{lo:.6g}, {hi:.6g}]"
+            msg = (f"{MESSAGES[0]} (pseudo-arclength continuation in {param}: left "
+                   f"[{lo:.6g}, {hi:.6g}])")
             break
-    if status == 1:
-        msg = f"max_steps={max_steps} reached at {param}={y[-1]:.8g}"
+    if status == -2:
+        msg = f"{MESSAGES[-2]}: max_steps={max_steps} at {param}={y[-1]:.8g}"
     folds = []
     for i in range(len(points) - 1):
         a, b = points[i].dp_ds, points[i + 1].dp_ds
@@ -387,8 +391,8 @@ def _arclength(factory, prob, x, vals, step, param, tol, maxiter, max_steps, ds_
         msg += "; folds at " + ", ".join(f"{param}={f.param:.10g}" for f in folds)
     if bps:
         msg += f"; det F_x changes sign without a fold after point(s) {list(bps)}"
-    return Branch(param, tuple(points), tuple(folds), bps, "pseudo-arclength", status == 0,
-                  status, msg, steps, n_rej)
+    return Branch(param, tuple(points), tuple(folds), bps, "pseudo-arclength", status >= 0,
+                  status, msg, steps, n_rej, n_newton)
 
 
 def _locate_fold(prob, pa, pb, ta, index, tol, maxiter, refine):

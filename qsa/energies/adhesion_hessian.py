@@ -111,43 +111,13 @@ import numpy as np
 import scipy.sparse as sp
 
 from qsa.curve import Curve
+from qsa.discretize import cumulative_factors
 from qsa.linalg import ReducedHessian
 
 __all__ = ["AdhesionDerivatives", "adhesion_derivatives", "cumulative_factors", "HESSIAN_FORMS"]
 
 #: The assembled forms of :meth:`AdhesionDerivatives.hessian`.
 HESSIAN_FORMS = ("auto", "dense", "reduced")
-
-
-def cumulative_factors(N):
-    """Sparse ``(Bd, R)`` with ``Bd^{-1} R`` the trapezoid cumulative integral on N nodes.
-
-    ``(Bd z)_0 = z_0``, ``(Bd z)_j = z_j - z_{j-1}``; ``(R f)_0 = 0``,
-    ``(R f)_j = (f_{j-1} + f_j) / (2 N)``: ``z = Bd^{-1} R f`` is
-    :meth:`FiniteDifference.cumulative <qsa.discretize.FiniteDifference.cumulative>`.
-
-    Parameters
-    ----------
-    N : int
-
-    Returns
-    -------
-    Bd, R : scipy.sparse.csr_matrix, shape (N, N)
-
-    Examples
-    --------
-    >>> import numpy as np, scipy.sparse.linalg as spla
-    >>> from qsa import FiniteDifference
-    >>> Bd, R = cumulative_factors(8)
-    >>> f = np.arange(8.0) ** 2
-    >>> bool(np.allclose(spla.spsolve(Bd.tocsc(), R @ f), FiniteDifference(8).cumulative(f)))
-    True
-    """
-    N = int(N)
-    Bd = (sp.identity(N) - sp.eye(N, k=-1)).tocsr()
-    R = sp.lil_matrix(0.5 / N * (sp.identity(N) + sp.eye(N, k=-1)))
-    R[0, 0] = 0.0
-    return Bd, R.tocsr()
 
 
 class _Entries:

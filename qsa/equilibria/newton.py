@@ -68,18 +68,22 @@ from qsa.linalg import SparsePlusLowRank
 
 # multipliers, normal_velocity and residual_scale are properties of the energy on the
 # closed manifold (qsa.energies.constrained); they are re-exported here for old imports.
-__all__ = ["polish", "PolishResult", "EquilibriumSystem", "multipliers", "residual_scale",
-           "normal_velocity"]
+__all__ = ["polish", "PolishResult", "MESSAGES", "NewtonRun", "newton_solve",
+           "EquilibriumSystem", "multipliers", "residual_scale", "normal_velocity"]
 
 _EPS = np.finfo(float).eps
 
-STATUS_MESSAGES = {
+#: Meaning of :attr:`PolishResult.status` (0 success, positive: success with a caveat,
+#: negative: failure); :attr:`PolishResult.message` starts with the entry.
+MESSAGES = {
     0: "converged: relative residual below tol",
     1: "converged to the round-off floor (tol is below what this grid can resolve)",
-    2: "maximum number of Newton iterations reached",
-    3: "singular or non-finite Newton system",
-    4: "line search failed: the residual does not decrease along the Newton direction",
+    -1: "maximum number of Newton iterations reached",
+    -2: "singular or non-finite Newton system",
+    -3: "line search failed: the residual does not decrease along the Newton direction",
 }
+#: Deprecated name of :data:`MESSAGES` (the failure codes were 2, 3, 4; now -1, -2, -3).
+STATUS_MESSAGES = MESSAGES
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,11 +93,14 @@ class PolishResult(Equilibrium):
     Attributes (besides those of :class:`Equilibrium`)
     --------------------------------------------------
     status : int
-        0 converged to ``tol``, 1 converged to the round-off floor, 2 ``maxiter``
-        reached, 3 singular system, 4 line search failed (see ``STATUS_MESSAGES``).
-    n_iter : int
-        Newton steps taken.
-    history : ndarray, shape (n_iter + 1,)
+        A key of :data:`MESSAGES`: 0 converged to ``tol``, 1 converged to the round-off
+        floor, -1 ``maxiter`` reached, -2 singular system, -3 line search failed.
+        ``success = status >= 0``.
+    n_newton : int
+        Newton steps taken (``n_iter`` is a read-only alias).
+    n_lu : int
+        Factorizations of the Newton matrix.
+    history : ndarray, shape (n_newton + 1,)
         Relative residual of the square system before each step and at the end:
         ``max(max|V^n + a.phi| / scale, |C| / L)``.
     unfolding : ndarray, shape (3,)
@@ -110,20 +117,26 @@ class PolishResult(Equilibrium):
     >>> from qsa.equilibria import circle
     >>> eq = circle(1.0, 0.1, kstar=5.0)
     >>> res = polish(eq.energy, eq.curve)
-    >>> bool(res.success), res.status, res.n_iter <= 2
+    >>> bool(res.success), res.status, res.n_newton <= 2
     (True, 0, True)
     """
 
     status: int = 0
-    n_iter: int = 0
+    n_newton: int = 0
+    n_lu: int = 0
     history: np.ndarray = field(default_factory=lambda: np.zeros(0))
     unfolding: np.ndarray = field(default_factory=lambda: np.zeros(3))
     noise_floor: float = 0.0
 
+    @property
+    def n_iter(self) -> int:
+        """Read-only alias of :attr:`n_newton` (the former name)."""
+        return self.n_newton
+
     def summary(self) -> dict:
-        """The :meth:`Equilibrium.summary` plus the Newton record (status, n_iter, history)."""
+        """The :meth:`Equilibrium.summary` plus the Newton record (status, counters, history)."""
         out = super().summary()
-        out.update(status=int(self.status), n_iter=int(self.n_iter),
+        out.update(status=int(self.status), n_newton=int(self.n_newton), n_lu=int(self.n_lu),
                    history=[float(h) for h in self.history],
                    unfolding=[float(a) for a in self.unfolding],
                    noise_floor=float(self.noise_floor))
@@ -501,8 +514,39 @@ def _check_curve(energy, curve):
         raise ValueError(f"energy must be a qsa Energy, got {type(energy).__name__}")
 
 
-def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True):
-    """Damped Newton on ``system.residual``; returns ``(x, status, history, n_iter, floor)``.
+@dataclass(frozen=True, eq=False)
+class NewtonRun:
+    """The record of :func:`newton_solve`.
+
+    Attributes
+    ----------
+    x : ndarray, shape (system.size,)
+        The best state found (the last one unless a later step was worse).
+    status : int
+        A key of :data:`MESSAGES`.
+    history : ndarray, shape (n_newton + 1,)
+        Relative residual before each step and at the end.
+    n_newton, n_lu : int
+        Newton steps taken and factorizations of the Newton matrix.
+    noise_floor : float
+        Estimated round-off level of the relative residual.
+    """
+
+    x: np.ndarray
+    status: int
+    history: np.ndarray
+    n_newton: int
+    n_lu: int
+    noise_floor: float
+
+    @property
+    def success(self) -> bool:
+        """``status >= 0``."""
+        return self.status >= 0
+
+
+def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True) -> NewtonRun:
+    """Damped Newton on ``system.residual`` from ``x0``.
 
     Step control (``line_search=True``): a trial step ``x + t dx`` (``t = 1, 1/2, ...``,
     at most 10 halvings) is accepted when the relative residual decreases, or when it
@@ -519,7 +563,22 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
     the Newton corrections instead (it is invariant under any rescaling of the
     equations), so full steps are taken wherever Newton converges. Never raises for
     non-convergence: the best state (smallest relative residual, never worse than
-    ``x0``) is returned with a status code (see ``STATUS_MESSAGES``).
+    ``x0``) is returned with a status code (a key of :data:`MESSAGES`).
+
+    Parameters
+    ----------
+    system : EquilibriumSystem
+    x0 : ndarray, shape (system.size,)
+    tol : float
+        Target of :meth:`EquilibriumSystem.scaled_norm`.
+    maxiter : int
+    energy : Energy, optional
+        Another energy on the same system (default the system's).
+    line_search : bool
+
+    Returns
+    -------
+    NewtonRun
     """
     x = np.array(x0, dtype=float)
     scale = residual_scale(system.energy if energy is None else energy, system.curve(x))
@@ -527,30 +586,31 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
     r = system.scaled_norm(F, system.curve(x), scale)
     history = [r]
     best = (r, x.copy())
-    status = 2
+    status = -1
     floor = None
-    n_iter = 0
+    n_newton = n_lu = 0
     for it in range(maxiter + 1):
         if not np.isfinite(r):
-            status = 3
+            status = -2
             break
         if r <= tol:
             status = 0
             break
         if it == maxiter:
-            status = 2
+            status = -1
             break
         try:
+            n_lu += 1
             fac = _Factor(system.jacobian(x, energy))
             if fac.singular:
-                status = 3
+                status = -2
                 break
             dx = -fac.solve(F)
         except (RuntimeError, np.linalg.LinAlgError, ValueError):
-            status = 3
+            status = -2
             break
         if not np.all(np.isfinite(dx)):
-            status = 3
+            status = -2
             break
         size = system.step_norm(dx, x, scale)
         t = 1.0
@@ -568,11 +628,11 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
                     accepted = True
                     break
             t *= 0.5
-        n_iter += 1
+        n_newton += 1
         if not accepted:
             # At the round-off floor no step can decrease the residual any more.
             floor = _noise_floor(system, x, scale, energy)
-            status = 1 if _at_floor(system, x, F, scale, tol, floor) else 4
+            status = 1 if _at_floor(system, x, F, scale, tol, floor) else -3
             break
         x, F, r = xt, Ft, rt
         history.append(r)
@@ -588,7 +648,7 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
         x, r = best[1], best[0]
     if floor is None:
         floor = _noise_floor(system, x, scale, energy)
-    return x, status, np.array(history), n_iter, float(np.max(floor))
+    return NewtonRun(x, status, np.array(history), n_newton, n_lu, float(np.max(floor)))
 
 
 def _natural_test(system, fac, Ft, x, scale, size, t) -> bool:
@@ -642,7 +702,7 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
         ``closure = |C(U)|``, ``multipliers`` (Lambda, by projection of
         ``nabla_I E`` on ``span Psi`` in ``<f, h> = int f h dsigma``), ``params``
         (``L``, the energy's parameters, ``nu1 = -Lambda_3``, ``nu2 = beta (L - L*)``
-        when a perimeter term is present), plus ``status``, ``n_iter``, ``history``
+        when a perimeter term is present), plus ``status``, ``n_newton``, ``n_lu``, ``history``
         (relative residual per iteration), ``unfolding``, ``noise_floor``. A solve
         that does not converge returns ``success=False`` with the best state found.
 
@@ -673,26 +733,42 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
     maxiter = integer(maxiter, "maxiter", minimum=0)
     guess = _equal_arclength(curve)
     system = EquilibriumSystem(energy, guess)
-    x, status, history, n_iter, floor = newton_solve(system, system.pack(guess), tol, maxiter,
-                                                     line_search=line_search)
-    return _result(energy, system, x, status, history, n_iter, floor, curve is not guess)
+    run = newton_solve(system, system.pack(guess), tol, maxiter, line_search=line_search)
+    return polish_result(energy, system, run, reparameterized=curve is not guess)
 
 
-def _result(energy, system, x, status, history, n_iter, floor, reparameterized=False):
+def polish_result(energy, system, run: NewtonRun, reparameterized=False) -> PolishResult:
+    """The :class:`PolishResult` of a Newton run on ``system`` (residuals, multipliers, message).
+
+    Parameters
+    ----------
+    energy : Energy
+        The energy the state is an equilibrium of.
+    system : EquilibriumSystem
+    run : NewtonRun
+    reparameterized : bool
+        Say in the message that the guess was reparameterized to constant ``g``.
+
+    Returns
+    -------
+    PolishResult
+    """
+    x, status = run.x, run.status
     c = system.curve(x)
     V = normal_velocity(energy, c)
     scale = residual_scale(energy, c)
     res = float(np.max(np.abs(V)))
     clo = float(np.linalg.norm(c.closure()))
     Lambda = multipliers(energy, c)
-    success = status in (0, 1)
-    msg = (f"polish: {STATUS_MESSAGES[status]}; {n_iter} Newton steps, max|V^n| = {res:.2e} "
+    msg = (f"{MESSAGES[status]}; {run.n_newton} Newton steps, max|V^n| = {res:.2e} "
            f"({res / scale:.1e} of the largest term), |C(U)| = {clo:.2e}, "
-           f"round-off floor ~{floor:.1e}")
+           f"round-off floor ~{run.noise_floor:.1e}")
     if reparameterized:
         msg += "; the guess was reparameterized to constant g"
+    a = np.array(x[system.N + 1:], dtype=float)
+    unfolding = a if system.n_unfold == 3 else np.concatenate([a, [0.0]])
     return PolishResult(c, energy, _params(energy, c, Lambda), Lambda, res, clo, scale,
-                        "polished", success, msg, {}, status, n_iter, np.asarray(history),
-                        np.array(x[system.N + 1:], dtype=float).copy()
-                        if system.n_unfold == 3 else
-                        np.concatenate([x[system.N + 1:], [0.0]]), float(floor))
+                        kind="polished", success=status >= 0, message=msg, status=status,
+                        n_newton=run.n_newton, n_lu=run.n_lu,
+                        history=np.asarray(run.history, dtype=float), unfolding=unfolding,
+                        noise_floor=float(run.noise_floor))

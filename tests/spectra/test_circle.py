@@ -5,8 +5,8 @@ import pytest
 
 from qsa import FiniteDifference, Fourier
 from qsa.equilibria import circle
-from qsa.spectra import linearization, spectrum
-from tests.helpers import fitted_order
+from qsa.spectra import MESSAGES, linearization, spectrum
+from tests.helpers import assert_status_convention, fitted_order
 from tests.spectra.conftest import (
     faceting_circle_eigenvalues,
     helfrich_circle,
@@ -45,6 +45,7 @@ def test_faceting_circle_fourier_normal_gauge(R, alpha, kstar, beta):
     s = spectrum(eq.energy, eq.curve)
     exact, lam0 = faceting_circle_eigenvalues(R, alpha, kstar, beta, (N - 1) // 2)
     assert s.success and s.status == 0 and s.spurious.size == 0
+    assert_status_convention(s, MESSAGES)
     _check_against(s.eigenvalues, exact, s.kernel_tol, 1e-8)
     assert s.n_unstable == _expected_unstable(lam0)
     assert s.n_kernel == 2 and s.kernel.expected_kernel_dimension == 2
