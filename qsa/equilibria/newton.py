@@ -34,7 +34,7 @@ Jacobian
 --------
 Exact derivatives of the *discrete* residual (verified against central
 differences in the tests). With ``mu = d_kappa E``, ``xi = g d_g E`` (``nabla_I E``
-in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``,
+in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``, ::
 
     V^n = (Delta_s + kappa^2) mu - kappa xi,
     dV^n/dkappa = (Delta_s + kappa^2) H_kk + diag(2 kappa mu - xi) - diag(kappa g) H_gk,
@@ -97,8 +97,10 @@ STATUS_MESSAGES = MESSAGES
 class PolishResult(Equilibrium):
     """An :class:`Equilibrium` from :func:`polish`, with the Newton record.
 
-    Attributes (besides those of :class:`Equilibrium`)
-    --------------------------------------------------
+    Besides the attributes of :class:`Equilibrium`:
+
+    Attributes
+    ----------
     status : int
         A key of :data:`MESSAGES`: 0 converged to ``tol``, 1 converged to the round-off
         floor, -1 ``maxiter`` reached, -2 singular system, -3 line search failed.
