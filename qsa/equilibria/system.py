@@ -298,24 +298,35 @@ class EquilibriumSystem:
         r = self._constraint_rows()
         return F[r:r + self.m] / np.array([abs(con.target) for con in self.constraints])
 
-    def merit(self, F, c: Curve, scale: float) -> float:
-        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows).
+    def step_norm(self, dx, x, scale: float) -> float:
+        """Size of a change ``dx`` of the unknowns ``x``: a scaled RMS norm in state space.
+
+        ``kappa`` is measured against ``max(max|kappa|, 2 pi / L)``, ``L`` against ``L``,
+        the unfolding parameters against the residual scale (they have the units of
+        ``V^n``) and a constraint multiplier ``mu_i`` against the residual scale over
+        ``max|n_i|``. The Newton line search compares Newton corrections in this norm
+        (the natural monotonicity test of :func:`~qsa.equilibria.newton.newton_solve`).
 
         Parameters
         ----------
-        F, c, scale
-            As in :meth:`scaled_parts`.
+        dx, x : ndarray, shape (size,)
+        scale : float
+            :func:`residual_scale` at ``x``.
 
         Returns
         -------
         float
         """
         N = self.N
-        m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
-        if self.phase is not None:
-            m += (F[N + 3] / max(np.max(np.abs(c.kappa)), 1.0)) ** 2
+        L = abs(x[N])
+        k_scale = max(float(np.max(np.abs(x[:N]))), 2 * np.pi / L)
+        m = np.mean((dx[:N] / k_scale) ** 2) + (dx[N] / L) ** 2
+        m += np.sum((self.unfolding(dx) / scale) ** 2)
         if self.m:
-            m += np.sum(self._scaled_defects(F) ** 2)
+            c = self.curve(x)
+            n_size = np.array([np.max(np.abs(con.normal_variation(c)))
+                               for con in self.constraints])
+            m += np.sum((self.constraint_multipliers(dx) * n_size / scale) ** 2)
         return float(np.sqrt(m))
 
     def scaled_norm(self, F, c: Curve, scale: float) -> float:
