@@ -22,14 +22,20 @@ largest of ``(W J - sigma W)^{-1} W``, and that inverse is applied without formi
     [ -H_kg gk                 -H_kk        I   ] [psi] = [0]        (gk = diag(g kappa))
     [ -G                        I           0   ] [chi]   [0]
 
-whose blocks are the order-2 factors themselves. Two kinds of dense columns are
-bordered on (block elimination with one step of iterative refinement, which is
-accurate even when the core is nearly singular): the low-rank part ``U V^T`` of ``H``
-(the perimeter penalty's rank-one term on finite-difference grids), and the
-deflation of the rigid motions -- the solution is kept ``<.,.>``-orthogonal to the
-normal components ``R`` of the rigid motions (exactly in ``ker J`` in the continuum),
-so the pencil is solved on their orthogonal complement and the rigid Ritz values are
-computed separately, by the factored quadratic form.
+whose blocks are the order-2 factors themselves. When ``H`` holds the Hessian of a
+two-point energy on a finite-difference grid (:class:`~qsa.linalg.ReducedHessian`: the
+Hessian through an implicit state, the node positions), that state and its adjoint are
+further sparse unknowns of the same system. Two kinds of dense columns are bordered on
+by block elimination: the low-rank part ``U V^T`` of ``H`` (the perimeter penalty's
+rank-one term on finite-difference grids), and the deflation of the rigid motions --
+the solution is kept ``<.,.>``-orthogonal to the normal components ``R`` of the rigid
+motions (exactly in ``ker J`` in the continuum, and an invariant subspace at an
+equilibrium), so the pencil is solved on their orthogonal complement; the rigid Ritz
+values are computed separately, by Rayleigh-Ritz of the inverse on ``span R``
+(:meth:`ShiftInvert.kernel_ritz`). Every solve is refined once with the residual of
+the whole bordered system accumulated in extended precision (``np.longdouble``), which
+makes block elimination accurate even when the shifted core is nearly singular and
+brings the forward error down to the rounding of the solution itself.
 
 Round-off then enters through the factors: the error of a slow eigenvalue scales with
 the order-2 blocks applied to its (smooth) eigenvector, not with ``|J|``.
