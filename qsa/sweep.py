@@ -52,7 +52,6 @@ import math
 import multiprocessing as mp
 import os
 import sys
-import tempfile
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -61,6 +60,7 @@ from pathlib import Path
 import numpy as np
 
 from qsa._version import __version__
+from qsa.io import write_atomically
 
 __all__ = [
     "ParameterGrid",
@@ -270,17 +270,7 @@ def dask_executor(address=None, n_workers=None, threads_per_worker=1):
 # ------------------------------------------------------------- point files
 def _atomic_write(path: Path, data: bytes):
     """Write ``data`` to ``path`` so that readers see the old file or the whole new one."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    write_atomically(path, lambda fh: fh.write(data))
 
 
 def _is_scalar(v) -> bool:

@@ -2,7 +2,7 @@
 driver ``solve_flow`` (``solve``)."""
 
 from qsa.flows.dae import CHA, FacetingFlow, equalize_chords, self_intersections
-from qsa.flows.solve import FlowResult, solve_flow
+from qsa.flows.solve import FlowInterrupted, FlowResult, solve_flow
 
-__all__ = ["CHA", "FacetingFlow", "FlowResult", "solve_flow", "equalize_chords",
-           "self_intersections"]
+__all__ = ["CHA", "FacetingFlow", "FlowInterrupted", "FlowResult", "solve_flow",
+           "equalize_chords", "self_intersections"]
