@@ -491,7 +491,10 @@ class Curve:
         Raises
         ------
         ValueError
-            Invalid samples (see :func:`qsa.resample.closed_samples`) or clockwise data.
+            Invalid samples (see :func:`qsa.resample.closed_samples`), clockwise
+            data, or samples of a curve that is not simple: crossing segments, or
+            a total turning ``int kappa dsigma`` other than ``2 pi`` (a limaçon
+            with an inner loop turns twice).
 
         Examples
         --------
@@ -501,6 +504,12 @@ class Curve:
         >>> c = Curve.from_positions(2 * np.cos(t), np.sin(t), Fourier(33))
         >>> round(c.length(), 6)  # ellipse with semi-axes 2 and 1
         9.688448
+        >>> r = 0.5 + np.cos(t)  # limaçon with an inner loop: turning number 2
+        >>> try:
+        ...     Curve.from_positions(r * np.cos(t), r * np.sin(t), Fourier(33))
+        ... except ValueError as exc:
+        ...     print(str(exc)[:48])
+        from_positions: the samples intersect themselves
         """
         x, y = closed_samples(x, y, name="from_positions(x, y)")
         if interpolant == "auto":
@@ -509,8 +518,19 @@ class Curve:
         if area <= 0:
             raise ValueError("from_positions: the samples run clockwise (or enclose no area); "
                              "pass them counter-clockwise")
-        return cls._from_interpolant(PeriodicInterpolant(x, y, interpolant), grid,
-                                     stencil_kappa=grid.sparse)
+        crossings = self_intersections(x, y)
+        if crossings.shape[0]:
+            i, j = crossings[0]
+            raise ValueError(f"from_positions: the samples intersect themselves (segments {i} "
+                             f"and {j} cross); a curve must be simple (turning number 1)")
+        curve = cls._from_interpolant(PeriodicInterpolant(x, y, interpolant), grid,
+                                      stencil_kappa=grid.sparse)
+        turning = float(curve.kappa @ curve.dsigma) / (2 * np.pi)
+        if abs(turning - 1) > 0.25:
+            raise ValueError(f"from_positions: the resampled curve turns {turning:.3g} times "
+                             f"(int kappa dsigma = {2 * np.pi * turning:.4g}, not 2 pi); it is "
+                             "not simple, or the grid is too coarse for it")
+        return curve
 
     @classmethod
     def _from_interpolant(cls, curve: PeriodicInterpolant, grid: Grid,

@@ -144,17 +144,18 @@ def run_command(func, args) -> int:
         checkpoint = getattr(exc, "checkpoint", None)
         if checkpoint:
             hint = getattr(args, "resume_hint", None)
-            how = hint(args, checkpoint) if hint else f"--resume {checkpoint}"
+            how = hint(args, checkpoint) if hint else \
+                f"the same command and --resume {checkpoint}"
             t = getattr(exc, "t", None)
             at = "" if t is None else f" at t = {t:.6g}"
-            _error(args, f"interrupted{at}; checkpoint saved in {checkpoint}: continue with "
-                         f"the same command and {how}")
+            _error(args, f"interrupted{at}; checkpoint saved in {checkpoint}; continue with: "
+                         f"{how}")
         else:
             _error(args, "interrupted")
         return EXIT_INTERRUPTED
     except MemoryError as exc:
         detail = f" ({exc})" if str(exc) else ""
-        _error(args, f"out of memory{detail}; try a smaller --N")
+        _error(args, f"out of memory{detail}")
         return EXIT_BAD_INPUT
     except ValueError as exc:
         _error(args, str(exc))

@@ -3,7 +3,7 @@
 Examples
 --------
 ``qsa flow cha --N 100 --t-final 0.2 --tol 1e-4 --out run-cha``  (the appendix example)
-``qsa flow facet --alpha 0.1 --kstar 5 --beta 5 --L-star 8 --shape wobbly --lobes 9 --N 600``
+``qsa flow facet --alpha 0.1 --kstar 5 --beta 5 --preferred-length 8 --shape wobbly --lobes 9``
 ``qsa flow cha --resume run-cha/checkpoint.npz --t-final 0.4``
 ``qsa flow facet --init eq.npz --t-final 0.01``  (from ``qsa equilibrium ... --save eq.npz``)
 
@@ -53,8 +53,8 @@ def add_parser(sub):
     q.add_argument("--rho", type=positive_float, help=f"precompression (default {d['rho']:g})")
     q.add_argument("--A0", type=nonnegative_float,
                    help=f"adhesion strength; 0 = off (default {d['A0']:g})")
-    q.add_argument("--l-star", "--kernel-length", dest="l_star", type=positive_float,
-                   help=f"adhesion kernel length l* (default {d['l_star']:g})")
+    q.add_argument("--kernel-length", "--l-star", dest="l_star", metavar="LENGTH",
+                   type=positive_float, help=f"adhesion kernel length l* (default {d['l_star']:g})")
     q.add_argument("--a", type=positive_float, help=f"kernel shape (default {d['a']:g})")
     _common(q, "cha")
     d = MODEL_DEFAULTS["facet"]
@@ -64,7 +64,8 @@ def add_parser(sub):
                    help=f"second well kappa* (default {d['kstar']:g})")
     q.add_argument("--beta", type=nonnegative_float,
                    help=f"length penalty (default {d['beta']:g})")
-    q.add_argument("--L-star", "--preferred-length", dest="L_star", type=positive_float,
+    q.add_argument("--preferred-length", "--L-star", dest="L_star", metavar="LENGTH",
+                   type=positive_float,
                    help="preferred length L* of the length penalty (default: the "
                         "equilibrium's with --init EQ.npz, else 1.2 x the initial length)")
     _common(q, "facet")
@@ -109,7 +110,13 @@ def _common(q, model):
     q.add_argument("--no-plots", action="store_true", help="no figure in --out")
     q.add_argument("--json", action="store_true", help="JSON summary on stdout")
     q.add_argument("--plot", metavar="FILE", help="write the figure to FILE")
-    q.set_defaults(func=run)
+    q.set_defaults(func=run, resume_hint=resume_hint)
+
+
+def resume_hint(args, checkpoint):
+    """The command that continues an interrupted flow."""
+    out = f" --out {args.out}" if args.out else ""
+    return f"{args.qsa_prog} --resume {checkpoint}{out}"
 
 
 def _bool_action():

@@ -7,7 +7,7 @@ their separation against l* sqrt(a^2 + 1/2), and the self-intersection
 reports (the paper: a glancing self-intersection at rho = 1.4).
 
 With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
-petals, not the paper's labyrinths and stacked layers; ``--l-star 0.1 --N 600``
+petals, not the paper's labyrinths and stacked layers; ``--kernel-length 0.1 --N 600``
 gives those (``qsa.paper.CHAScenario`` explains why and lists the
 hypotheses tested).
 """
@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import os
 
+from qsa.commands._options import positive_float
 from qsa.commands._simulations import (
     cha_arguments,
     cha_lines,
@@ -30,9 +31,12 @@ HELP = "CHA folding for rho = 1.2, 1.3, 1.4 from identical data (f:fold, Table T
 
 
 def add_arguments(parser):
-    common_arguments(parser, "qsa-folding")
+    from qsa.paper.scenarios import CHAScenario
+
+    common_arguments(parser, "qsa-folding",
+                     f"{CHAScenario().t_final:g}, the paper's last figure time")
     cha_arguments(parser)
-    parser.add_argument("--rho", type=float, nargs="+", default=[1.2, 1.3, 1.4],
+    parser.add_argument("--rho", type=positive_float, nargs="+", default=[1.2, 1.3, 1.4],
                         help="precompression factors (default 1.2 1.3 1.4)")
 
 

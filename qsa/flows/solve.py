@@ -325,10 +325,10 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
         return save_npz(path_for_write, arrays, meta)
 
     path_for_write = checkpoint
-    bar = _progress_bar(progress, integ.t, t_final)
-    status, last_write = 0, time.monotonic()
+    status, last_write, bar = 0, time.monotonic(), None
     stop_request = _StopRequest()
     try:
+        bar = _progress_bar(progress, integ.t, t_final)
         while integ.t < t_final:
             if stop_request.pending:
                 if checkpoint is None:

@@ -10,7 +10,7 @@ import numpy as np
 
 from qsa.io import json_default, load_npz, save_npz
 
-__all__ = ["write_output", "Series", "checkpoint_time"]
+__all__ = ["write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
 
 
 def write_output(out, name, arrays, summary):
@@ -63,3 +63,9 @@ def checkpoint_time(path):
     """Time of the last step stored in a ``solve_flow`` checkpoint."""
     arrays, _ = load_npz(path)
     return float(arrays["step_t"][-1])
+
+
+def checkpoint_nodes(path):
+    """Number of nodes of the run stored in a ``solve_flow`` checkpoint."""
+    arrays, _ = load_npz(path)
+    return int(arrays["x_setup"].size)

@@ -216,7 +216,7 @@ def _centred(P, L):
 
 def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, method="bdf2",
                    rtol=1e-4, fractions=FRACTIONS, correction=None, reference_N=None,
-                   alpha=None, kstar=None, beta=None):
+                   alpha=None, kstar=None, beta=None, progress=False):
     """Run the DAE flow and the front ODE from the same splice and compare them.
 
     Parameters
@@ -247,6 +247,9 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
         errors near the collision are to be read.
     alpha, kstar, beta : float, optional
         Replace the scenario's values.
+    progress : bool or None
+        Progress bar of the DAE runs (:func:`qsa.flows.solve_flow`; ``None``: on a
+        terminal).
 
     Returns
     -------
@@ -260,7 +263,7 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
     """
     sc = front_scenario(scenario, alpha=alpha, kstar=kstar, beta=beta)
     t_final = sc.t_final if t_final is None else float(t_final)
-    ref = _dae_fronts(sc, N, t_final, tol, method)
+    ref = _dae_fronts(sc, N, t_final, tol, method, progress)
     t, dae, tc_dae, L, p0, facet_min = ref.t, ref.positions, ref.t_c, ref.L, ref.p0, ref.facet_min
 
     ode = FrontODE(sc.alpha, sc.kstar, L, correction=correction)
@@ -334,7 +337,7 @@ class _DAEFronts:
     cpu: float
 
 
-def _dae_fronts(sc, N, t_final, tol, method):
+def _dae_fronts(sc, N, t_final, tol, method, progress=False):
     eq = sc.splice(FiniteDifference(N))
     p0 = np.array(eq.params["positions"])
     L = eq.params["L"]
@@ -347,7 +350,7 @@ def _dae_fronts(sc, N, t_final, tol, method):
 
     start = time.process_time()
     res = solve_flow(FacetingFlow(sc.alpha, sc.kstar, sc.beta, L), eq.curve.positions(),
-                     t_final, N=N, tol=tol, method=method, callback=stop, progress=False)
+                     t_final, N=N, tol=tol, method=method, callback=stop, progress=progress)
     cpu = time.process_time() - start
     tracks = track_flow(res, sc.kstar)
     tc = tracks.first_collision.time if tracks.events else np.nan

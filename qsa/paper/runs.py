@@ -48,7 +48,7 @@ from qsa.flows.analysis import (
 )
 from qsa.flows.solve import solve_flow
 from qsa.io import load_npz, save_npz
-from qsa.paper._files import Series, checkpoint_time, write_output
+from qsa.paper._files import Series, checkpoint_nodes, checkpoint_time, write_output
 from qsa.paper.results import (
     CHARun,
     Crossing,
@@ -164,12 +164,14 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
         else:
             t1 = 0.0
     later = snaps[snaps > t1] - t1
-    res2 = solve_flow(model, start, t_final - t1, N=sc.N, tol=sc.tol,
-                      t_eval=later if later.size else None, checkpoint=ck,
-                      resume=ck if resuming else None, progress=progress,
-                      checkpoint_interval=checkpoint_interval,
-                      callback=lambda t, y, s: observe(t + t1, y, s))
-    series.save()
+    try:
+        res2 = solve_flow(model, start, t_final - t1, N=sc.N, tol=sc.tol,
+                          t_eval=later if later.size else None, checkpoint=ck,
+                          resume=ck if resuming else None, progress=progress,
+                          checkpoint_interval=checkpoint_interval,
+                          callback=lambda t, y, s: observe(t + t1, y, s))
+    finally:  # also on Ctrl-C, so that a resumed run finds the series up to its checkpoint
+        series.save()
     return _facet_run(sc, out, series, stage1, res2, t1, t_final, wall0, band, ck)
 
 
@@ -239,6 +241,7 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     """
     sc = CHAScenario() if scenario is None else scenario
     t_final = sc.t_final if t_final is None else float(t_final)
+    N_given = N
     N = sc.N if N is None else int(N)
     if name is None:  # runs with another kernel length do not share checkpoints
         name = f"cha_rho{sc.rho:g}" + ("" if sc.l_star == CHAScenario.l_star
@@ -275,14 +278,18 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     snaps = snaps[(snaps > 0) & (snaps <= t_final)]
     resuming = bool(resume and ck is not None and os.path.isfile(ck))
     if resuming:
+        if N_given is None:  # a resumed run keeps its grid
+            N = checkpoint_nodes(ck)
         t_ck = checkpoint_time(ck)
         series.load(t_ck)
         saved = _load_crossing(crossing_file, t_ck)
         monitor.first_crossing = None if saved is None else asdict(saved)
-    res = solve_flow(model, sc.initial(N), t_final, N=N, tol=sc.tol, t_eval=snaps,
-                     checkpoint=ck, resume=ck if resuming else None, progress=progress,
-                     checkpoint_interval=checkpoint_interval, callback=observe)
-    series.save()
+    try:
+        res = solve_flow(model, sc.initial(N), t_final, N=N, tol=sc.tol, t_eval=snaps,
+                         checkpoint=ck, resume=ck if resuming else None, progress=progress,
+                         checkpoint_interval=checkpoint_interval, callback=observe)
+    finally:  # also on Ctrl-C, so that a resumed run finds the series up to its checkpoint
+        series.save()
     system = res.system
     a = series.arrays()
     fc = monitor.first_crossing
