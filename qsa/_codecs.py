@@ -276,6 +276,6 @@ def decode_flow_checkpoint(arrays, meta, path):
         message=f"Checkpoint {path} ({word}) at t = {t:.6g} of t_final = "
                 f"{meta.get('t_final', float('nan')):.6g}.",
         n_steps=int(scal["n_steps"]), n_rejected=int(scal["n_rejected"]),
-        n_newton=int(scal["n_iterations"]), n_factorizations=int(scal["n_factorizations"]),
+        n_newton=int(scal["n_iterations"]), n_lu=int(scal["n_factorizations"]),
         n_newton_failures=int(scal["n_newton_failures"]), checkpoint=str(path), x=X, y=Y,
         method=meta["options"]["method"], tol=float(meta["options"]["tol"]), system=system)

@@ -25,7 +25,7 @@ from qsa.commands._errors import EXIT_BROKEN_PIPE, epilog, run_command, silence_
 from qsa.commands._options import CommandParser, check_paths
 
 #: Subcommand modules under ``qsa.commands``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["demo", "equilibrium", "spectrum", "flow", "reproduce", "sweep"]
+SUBCOMMANDS = ["demo", "equilibrium", "spectrum", "bifurcate", "flow", "reproduce", "sweep"]
 
 
 def build_parser() -> argparse.ArgumentParser:

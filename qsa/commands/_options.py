@@ -40,7 +40,7 @@ FIGURE_FORMATS = ("png", "pdf", "svg", "svgz", "eps", "ps", "jpg", "jpeg", "tif"
 
 #: Options naming an output folder, an output file, an input file (by ``dest``).
 OUTPUT_FOLDERS = ("out",)
-OUTPUT_FILES = ("plot", "save", "checkpoint")
+OUTPUT_FILES = ("plot", "save", "checkpoint", "movie")
 INPUT_FILES = ("init", "resume")
 
 # -1, -.5, -1e-4, -2.5E+3, -inf, -nan: arguments, not options (argparse's own pattern

@@ -9,6 +9,18 @@ import os
 from qsa.commands._options import int_at_least, nonnegative_float, positive_float
 
 
+def check_resume(args, stems):
+    """Warn when ``--resume`` finds no checkpoint for a run (it then starts afresh)."""
+    from qsa.commands._errors import warn
+
+    if not args.resume:
+        return
+    for stem in stems:
+        path = os.path.join(args.out, f"{stem}_checkpoint.npz")
+        if not os.path.isfile(path):
+            warn(args, f"--resume: no checkpoint {path}; starting that run from t = 0")
+
+
 def resume_hint(args, checkpoint):
     """How ``qsa reproduce`` continues an interrupted run (the checkpoint lives in --out)."""
     return f"{args.qsa_prog} --resume --out {args.out} (and the other options as before)"

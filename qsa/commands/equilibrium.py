@@ -33,14 +33,16 @@ def _grid(args):
 def add_parser(sub):
     p = sub.add_parser("equilibrium", help="faceted equilibria: N-pulses, splices, circles",
                        description=__doc__.split("\n\n")[0])
-    add_kinds(p, run)
+    add_kinds(p, run, save="write the equilibrium to FILE (.npz; read it back with "
+                           "qsa.io.load, start a flow from it with qsa flow ... --init FILE)")
     return p
 
 
-def add_kinds(p, func, extra=None):
+def add_kinds(p, func, extra=None, save=None):
     """Add the ``npulse|splice|circle`` sub-parsers (with the shared options) to ``p``.
 
-    ``extra(q)``, if given, adds more options to each of them (``qsa spectrum`` uses it).
+    ``extra(q)``, if given, adds more options to each of them (``qsa spectrum`` uses it);
+    ``save``, if given, is the help of a ``--save FILE`` option.
     """
     kinds = p.add_subparsers(dest="kind", metavar="KIND", required=True)
 
@@ -57,9 +59,8 @@ def add_kinds(p, func, extra=None):
         q.add_argument("--fd", action="store_true", help="finite differences instead of Fourier")
         q.add_argument("--json", action="store_true", help="JSON summary on stdout")
         q.add_argument("--plot", metavar="FILE", help="write a figure to FILE")
-        q.add_argument("--save", metavar="FILE",
-                       help="write the result to FILE (.npz; read it back with qsa.io.load, "
-                            "start a flow from it with qsa flow ... --init FILE)")
+        if save is not None:
+            q.add_argument("--save", metavar="FILE", help=save)
         q.add_argument("--polish", action="store_true",
                        help="polish the state by Newton on V^n = 0 with closure (exact "
                             "discrete equilibrium of the reported energy)")
@@ -148,7 +149,7 @@ def build_polished(args):
 def run(args):
     eq = build_polished(args)
     summary = eq.summary()
-    if args.save:
+    if getattr(args, "save", None):
         from qsa.io import save_equilibrium
 
         summary["file"] = save_equilibrium(args.save, eq)
@@ -169,6 +170,6 @@ def run(args):
         print(f"  {'energy':>10} = {summary['energy']:.12g}")
         if args.plot:
             print(f"  figure written to {args.plot}")
-        if args.save:
+        if getattr(args, "save", None):
             print(f"  equilibrium written to {args.save}")
     return 0 if eq.success else 1

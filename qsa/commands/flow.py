@@ -6,6 +6,7 @@ Examples
 ``qsa flow facet --alpha 0.1 --kstar 5 --beta 5 --preferred-length 8 --shape wobbly --lobes 9``
 ``qsa flow cha --resume run-cha/checkpoint.npz --t-final 0.4``
 ``qsa flow facet --init eq.npz --t-final 0.01``  (from ``qsa equilibrium ... --save eq.npz``)
+``qsa flow facet --shape wobbly --lobes 7 --N 200 --t-final 0.02 --movie facet.gif``
 
 A resumed run takes its model, grid, method and tolerance from the checkpoint:
 options that contradict it are refused, options about the initial curve are
@@ -96,9 +97,9 @@ def _common(q, model):
                    help=f"local error tolerance (default {RUN_DEFAULTS['tol']:g})")
     q.add_argument("--method", choices=["be", "bdf2"],
                    help="backward Euler with step doubling (the paper's; default) or BDF2")
-    q.add_argument("--snapshots", type=int_at_least(2), default=6,
+    q.add_argument("--snapshots", type=int_at_least(2), default=None,
                    help="snapshots saved, the initial and final states included "
-                        "(default %(default)s)")
+                        "(default 6; 60 with --movie)")
     q.add_argument("--out", metavar="DIR",
                    help="folder for result.npz, summary.json, flow.png and checkpoint.npz")
     q.add_argument("--checkpoint", metavar="FILE", default=None,
@@ -110,6 +111,11 @@ def _common(q, model):
     q.add_argument("--no-plots", action="store_true", help="no figure in --out")
     q.add_argument("--json", action="store_true", help="JSON summary on stdout")
     q.add_argument("--plot", metavar="FILE", help="write the figure to FILE")
+    q.add_argument("--movie", metavar="FILE",
+                   help="write an animation of the snapshots to FILE.gif (Pillow) or "
+                        "FILE.mp4 (needs ffmpeg)")
+    q.add_argument("--fps", type=positive_float, default=10.0,
+                   help="movie frames per second (default %(default)g)")
     q.set_defaults(func=run, resume_hint=resume_hint)
 
 
@@ -260,7 +266,7 @@ def summarize(res):
         "success": bool(res.success), "status": int(res.status), "message": res.message,
         "method": res.method, "tol": res.tol, "N": res.N, "t_final": float(res.t[-1]),
         "n_steps": res.n_steps, "n_rejected": res.n_rejected, "n_newton": res.n_newton,
-        "n_factorizations": res.n_factorizations, "energy_initial": float(res.energy_steps[0]),
+        "n_lu": res.n_lu, "energy_initial": float(res.energy_steps[0]),
         "energy_final": float(res.energy_steps[-1]), "length_final": float(res.length_steps[-1]),
         "checkpoint": res.checkpoint, "model": res.system.metadata(),
     }
@@ -277,6 +283,11 @@ def run(args):
     from qsa.flows import solve_flow
     from qsa.io import save_flow_result
 
+    if args.movie:  # refuse a movie that cannot be written before running the flow
+        from qsa.plotting import movie_writer
+
+        movie_writer(args.movie)
+    snapshots = args.snapshots if args.snapshots is not None else (60 if args.movie else 6)
     if args.resume:
         plan = resume_plan(args)
         model, N, tol, method, t_final = (plan[k] for k in ("model", "N", "tol", "method",
@@ -293,7 +304,7 @@ def run(args):
     checkpoint = args.checkpoint
     if args.out and checkpoint is None:
         checkpoint = os.path.join(args.out, "checkpoint.npz")
-    t_eval = np.linspace(0.0, t_final, args.snapshots)
+    t_eval = np.linspace(0.0, t_final, snapshots)
     res = solve_flow(model, None if args.resume else xy, t_final, N=None if args.resume else N,
                      tol=tol, method=method, t_eval=t_eval, checkpoint=checkpoint,
                      resume=args.resume, progress=args.progress)
@@ -315,6 +326,11 @@ def run(args):
         for path in figures:
             written.append(save(fig, path))
         summary["figure"] = figures[0]
+    if args.movie:
+        from qsa.plotting import animate_flow
+
+        animate_flow(res, args.movie, fps=args.fps)
+        summary["movie"] = args.movie
     summary["files"] = written
     if args.json:
         print(json.dumps(summary, indent=2))
@@ -322,10 +338,12 @@ def run(args):
         print(f"{summary['model']['model']} N={res.N} {res.method} tol={res.tol:g}: "
               f"{res.message} t={summary['t_final']:.6g}, {res.n_steps} steps "
               f"({res.n_rejected} rejected), {res.n_newton} Newton iterations, "
-              f"{res.n_factorizations} factorizations; energy {summary['energy_initial']:.6g}"
+              f"{res.n_lu} factorizations; energy {summary['energy_initial']:.6g}"
               f" -> {summary['energy_final']:.6g}")
         if written:
             print("written: " + ", ".join(written))
+        if args.movie:
+            print(f"movie ({len(res.t)} frames) written to {args.movie}")
     if not res.success:
         note(args, f"the flow stopped early: {res.message}")
     return 0 if res.success else 1

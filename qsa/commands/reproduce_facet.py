@@ -9,7 +9,14 @@ paper's numbers; writes ``facet.npz``, ``facet.json`` and three figures.
 
 from __future__ import annotations
 
-from qsa.commands._simulations import common_arguments, emit, fmt, progress, save_figures
+from qsa.commands._simulations import (
+    check_resume,
+    common_arguments,
+    emit,
+    fmt,
+    progress,
+    save_figures,
+)
 
 HELP = "faceting coarsening: ~18 fronts -> 6 (rounded triangle), energy + R_kappa (f:facet)"
 
@@ -53,6 +60,7 @@ def run(args):
     from qsa.paper import FacetScenario, run_facet
 
     sc = replace(FacetScenario(), seed=args.seed)
+    check_resume(args, ["facet"])
     result = run_facet(sc, args.out, t_final=args.t_final, resume=args.resume,
                        progress=progress(args))
     s = result.summary()

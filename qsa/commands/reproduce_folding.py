@@ -21,6 +21,7 @@ from qsa.commands._simulations import (
     cha_arguments,
     cha_lines,
     cha_scenario,
+    check_resume,
     common_arguments,
     emit,
     progress,
@@ -42,9 +43,11 @@ def add_arguments(parser):
 
 def run(args):
     from qsa.paper import run_folding
-    from qsa.paper.runs import write_output
+    from qsa.paper.runs import cha_run_name, write_output
 
-    folding = run_folding([cha_scenario(args, rho) for rho in args.rho], args.out,
+    scenarios = [cha_scenario(args, rho) for rho in args.rho]
+    check_resume(args, [cha_run_name(sc) for sc in scenarios])
+    folding = run_folding(scenarios, args.out,
                           t_final=args.t_final, N=args.N, resume=args.resume,
                           progress=progress(args))
     summary = folding.summary()

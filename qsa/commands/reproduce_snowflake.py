@@ -20,6 +20,7 @@ from qsa.commands._simulations import (
     cha_arguments,
     cha_lines,
     cha_scenario,
+    check_resume,
     common_arguments,
     emit,
     progress,
@@ -43,8 +44,10 @@ def add_arguments(parser):
 
 def run(args):
     from qsa.paper import resolution_check, run_cha
+    from qsa.paper.runs import cha_run_name
 
     sc = cha_scenario(args, args.rho)
+    check_resume(args, [cha_run_name(sc)])
     summary, lines = {}, []
     if args.check_resolution:
         rc = resolution_check(sc, args.N, args.check_resolution, progress=progress(args))

@@ -44,7 +44,10 @@ def _extra(q):
 def add_parser(sub):
     p = sub.add_parser("spectrum", help="spectrum of the linearization at an equilibrium",
                        description=__doc__.split("\n\n")[0])
-    equilibrium.add_kinds(p, run, extra=_extra)
+    equilibrium.add_kinds(p, run, extra=_extra,
+                          save="write the spectrum and its equilibrium to FILE (.npz; read it "
+                               "back with qsa.io.load, the equilibrium with "
+                               "qsa.io.load_equilibrium; qsa flow ... --init FILE starts from it)")
     return p
 
 
@@ -71,8 +74,7 @@ def run(args):
         from qsa import plotting
 
         if args.mode is None:
-            fig = plotting.new_figure(size=(6.0, 4.0))[0]
-            plotting.plot_spectrum(spec, fig.axes[0])
+            fig = plotting.plot_spectrum(spec).figure  # all eigenvalues | those near 0
         else:
             fig = plotting.plot_eigenmode(spec, eq.curve, args.mode)
         plotting.save(fig, args.plot)

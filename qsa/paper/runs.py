@@ -60,7 +60,8 @@ from qsa.paper.results import (
 )
 from qsa.paper.scenarios import CHAScenario, FacetScenario
 
-__all__ = ["run_facet", "run_cha", "run_folding", "resolution_check", "coarsening_events",
+__all__ = ["run_facet", "run_cha", "cha_run_name", "run_folding", "resolution_check",
+           "coarsening_events",
            "write_output"]
 
 
@@ -208,6 +209,13 @@ def _facet_run(sc, out, series, stage1, res, t1, t_final, wall0, band, ck):
 
 
 # ----------------------------------------------------------------------- CHA
+def cha_run_name(scenario):
+    """File stem of a CHA run: ``cha_rho1.3`` (``_lstar0.1`` added for another kernel length,
+    so that runs with another l* do not share checkpoints)."""
+    return f"cha_rho{scenario.rho:g}" + ("" if scenario.l_star == CHAScenario.l_star
+                                         else f"_lstar{scenario.l_star:g}")
+
+
 def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=False,
             progress=None, snapshot_times=None, checkpoint_interval=30.0,
             monitor_every=1):
@@ -243,9 +251,8 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     t_final = sc.t_final if t_final is None else float(t_final)
     N_given = N
     N = sc.N if N is None else int(N)
-    if name is None:  # runs with another kernel length do not share checkpoints
-        name = f"cha_rho{sc.rho:g}" + ("" if sc.l_star == CHAScenario.l_star
-                                        else f"_lstar{sc.l_star:g}")
+    if name is None:
+        name = cha_run_name(sc)
     model = sc.model()
     wall0 = time.perf_counter()
     ck = None if out is None else os.path.join(out, f"{name}_checkpoint.npz")

@@ -79,7 +79,7 @@ def test_defaults_resolved_later_are_stated_from_their_source():
 
 def test_one_spelling_per_concept():
     primary = {}
-    for prog, parser in LEAVES.items():
+    for parser in LEAVES.values():
         for action in options(parser):
             primary.setdefault(action.dest, set()).add(action.option_strings[0])
     several = {dest: flags for dest, flags in primary.items() if len(flags) > 1}

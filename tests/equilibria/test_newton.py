@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 
 from qsa import Curve, FiniteDifference, Fourier
-from qsa.energies import CanhamHelfrich, Faceting, Perimeter
+from qsa.energies import CanhamHelfrich, Faceting, FunctionalizedCurvature, Perimeter
 from qsa.equilibria import circle, npulse, splice_polygon
 from qsa.equilibria.newton import (
+    MESSAGES,
     EquilibriumSystem,
     PolishResult,
     _cumulative_transpose,
@@ -14,7 +15,7 @@ from qsa.equilibria.newton import (
     polish,
 )
 from qsa.linalg import to_dense
-from tests.helpers import fitted_order, skew_curve
+from tests.helpers import assert_status_convention, fitted_order, skew_curve
 
 K = 5.0
 
@@ -63,6 +64,7 @@ def test_npulse_is_reproduced_and_multipliers():
     eq = npulse(3, 0.15, grid=Fourier(127), nu1=0.2)
     r = polish(eq.energy, eq.curve)
     assert isinstance(r, PolishResult) and r.success and r.status == 0, r.message
+    assert_status_convention(r, MESSAGES)
     assert r.kind == "polished"
     # the semi-analytic N-pulse is exact up to its quadrature: same state
     assert np.max(np.abs(r.curve.kappa - eq.curve.kappa)) < 1e-9
@@ -94,7 +96,8 @@ def test_quadratic_convergence_from_perturbed_npulse():
                   1.01 * c.g, c.grid, c.theta0, c.origin)
     r = polish(eq.energy, guess)
     assert r.success, r.message
-    assert r.n_iter == len(r.history) - 1 and r.n_iter <= 8
+    assert r.n_newton == len(r.history) - 1 and r.n_newton <= 8
+    assert r.n_lu == r.n_newton and r.n_iter == r.n_newton  # one LU per step; the old name
     _assert_quadratic(r)
     # same equilibrium up to the shift fixed by the phase condition
     assert r.params["L"] == pytest.approx(eq.params["L"], rel=1e-12)
@@ -135,7 +138,7 @@ def test_fd_converges_to_fourier_at_order_two():
 def test_circle_stays_put_and_perturbed_circle_returns(grid):
     eq = circle(1.0, 0.1, grid=grid, kstar=K, beta=5.0)
     r = polish(eq.energy, eq.curve)
-    assert r.success and r.n_iter == 0
+    assert r.success and r.n_newton == 0
     assert np.array_equal(r.curve.kappa, eq.curve.kappa)
     guess = Curve.polar(lambda t: 1 + 0.006 * np.cos(3 * t) + 0.004 * np.sin(2 * t), grid)
     r = polish(eq.energy, guess)
@@ -176,9 +179,48 @@ def test_failure_is_reported_not_raised():
     c, s = eq.curve, eq.curve.grid.s
     guess = c.with_kappa(c.kappa + 0.05 * np.cos(2 * np.pi * s))
     r = polish(eq.energy, guess, maxiter=1)
-    assert not r.success and r.status == 2 and "maximum" in r.message
-    assert r.n_iter == 1 and r.history.size == 2 and r.history[1] < r.history[0]
+    assert not r.success and r.status == -1 and "maximum" in r.message
+    assert_status_convention(r, MESSAGES)
+    assert r.n_newton == 1 and r.history.size == 2 and r.history[1] < r.history[0]
     assert np.all(np.isfinite(r.curve.kappa))
+
+
+def _functionalized_off_family(n, grid, shift=0.05):
+    """A faceting N-pulse as guess for FunctionalizedCurvature + Perimeter with L* moved off
+    the faceting family (sixth order in kappa: a full Newton step raises max|V^n| ~100x)."""
+    eq = npulse(n, 0.2, kstar=K, grid=grid)
+    L_star = eq.params["L"] + 1.0 * eq.params["nu2"] / 5.0 + shift
+    return FunctionalizedCurvature(0.2, 1.0, K) + Perimeter(5.0, L_star), eq.curve
+
+
+@pytest.mark.parametrize("n, shift", [(3, 0.05), (3, 0.2), (4, 0.05), (4, 0.2)])
+def test_line_search_takes_full_steps_on_sixth_order_problems(n, shift):
+    energy, guess = _functionalized_off_family(n, Fourier(101), shift)
+    r = polish(energy, guess)
+    free = polish(energy, guess, line_search=False)
+    assert r.success and r.residual <= 1e-8 * r.residual_scale
+    assert r.n_newton <= 7 and r.n_newton <= free.n_newton + 1
+    # the first full step raises the residual: the residual is not the merit
+    assert r.history[1] > 10 * r.history[0]
+
+
+def test_line_search_keeps_faceting_step_counts():
+    eq = npulse(3, 0.15, grid=Fourier(127))
+    c, s = eq.curve, eq.curve.grid.s
+    r = polish(eq.energy, c.with_kappa(c.kappa * (1 + 0.02 * np.cos(6 * np.pi * s))))
+    assert r.success and r.n_newton <= 5
+    rect = splice_polygon([np.pi / 2] * 4, [1.0, 1.5, 1.0, 1.5], 0.1, grid=Fourier(255))
+    r = polish(rect.energy, rect.curve)
+    assert r.success and r.n_newton <= 6
+
+
+def test_polish_never_returns_a_worse_state_than_its_guess():
+    energy, guess = _functionalized_off_family(3, Fourier(101))
+    r = polish(energy, guess, maxiter=1)
+    assert not r.success and r.status == -1
+    assert r.history[1] > r.history[0]  # the step was taken (and raised the residual) ...
+    assert r.residual / r.residual_scale <= r.history[0] * (1 + 1e-12)  # ... but not returned
+    assert np.array_equal(r.curve.kappa, guess.kappa)
 
 
 def test_bad_input_raises():
@@ -199,7 +241,7 @@ def test_summary_is_json_ready():
     eq = npulse(3, 0.15, grid=Fourier(101))
     r = polish(eq.energy, eq.curve)
     d = json.loads(json.dumps(r.summary()))
-    assert d["status"] == 0 and d["kind"] == "polished" and len(d["history"]) == r.n_iter + 1
+    assert d["status"] == 0 and d["kind"] == "polished" and len(d["history"]) == r.n_newton + 1
 
 
 def test_cli_polish_option(capsys):
