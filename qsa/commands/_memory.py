@@ -68,17 +68,19 @@ class Footprint:
 
 
 _MB = 2.0**20
-#: The fits (see the module docstring); keys ``<run>-<grid>``.
+#: The fits (see the module docstring; ``benchmarks/bench_memory.py`` measures them).
 FOOTPRINTS = {
     "flow-facet": Footprint(base=150 * _MB, per_node=17e3),
-    "flow-cha": Footprint(base=150 * _MB, per_node=17e3, per_pair=450.0),
+    "flow-cha": Footprint(base=150 * _MB, per_node=17e3, per_pair=700.0),
     "equilibrium-fourier": Footprint(base=90 * _MB, per_node2=32.0),
-    "equilibrium-fd": Footprint(base=90 * _MB, per_node=1.2e3),
-    "polish-fourier": Footprint(base=90 * _MB, per_node2=125.0),
+    "equilibrium-fd": Footprint(base=90 * _MB, per_node=1.25e3),
+    "polish-fourier": Footprint(base=90 * _MB, per_node=66e3, per_node2=92.0),
     "polish-fd": Footprint(base=90 * _MB, per_node=85e3),
-    "spectrum-fourier": Footprint(base=90 * _MB, per_node2=1000.0),
-    "spectrum-fd": Footprint(base=90 * _MB, per_node2=1000.0),
-    "spectrum-k": Footprint(base=90 * _MB, per_node=5e3),
+    "spectrum-fourier": Footprint(base=90 * _MB, per_node=1e5, per_node2=900.0),
+    "spectrum-fourier-noreject": Footprint(base=90 * _MB, per_node=3e4, per_node2=390.0),
+    "spectrum-fd": Footprint(base=90 * _MB, per_node=1.5e4, per_node2=37.0),
+    "spectrum-k-fourier": Footprint(base=90 * _MB, per_node=4e4, per_node2=335.0),
+    "spectrum-k-fd": Footprint(base=90 * _MB, per_node=4.8e3),
 }
 
 
@@ -204,8 +206,16 @@ def polish_bytes(N, fourier=True):
     return _estimate("polish-fourier" if fourier else "polish-fd", N)
 
 
-def spectrum_bytes(N, fourier=True, k=None):
-    """Estimate for :func:`qsa.spectra.spectrum` at N nodes (all eigenvalues, or ``k``)."""
+def spectrum_bytes(N, fourier=True, k=None, reject=True):
+    """Estimate for :func:`qsa.spectra.spectrum` at N nodes, equilibrium included.
+
+    All eigenvalues (dense, with the two-resolution check unless ``reject`` is
+    False) or the ``k`` nearest a shift (sparse shift-invert; the Fourier grid's
+    operators are dense all the same).
+    """
+    grid = "fourier" if fourier else "fd"
     if k is not None:
-        return _estimate("spectrum-k", N)
-    return _estimate("spectrum-fourier" if fourier else "spectrum-fd", N)
+        return _estimate(f"spectrum-k-{grid}", N)
+    if fourier and not reject:
+        return _estimate("spectrum-fourier-noreject", N)
+    return _estimate(f"spectrum-{grid}", N)

@@ -21,6 +21,15 @@ def check_resume(args, stems):
             warn(args, f"--resume: no checkpoint {path}; starting that run from t = 0")
 
 
+def start_note(args, what):
+    """Say on stderr what a long run does and where its checkpoint goes, before it starts."""
+    from qsa.commands._errors import note
+
+    bar = "" if args.progress is False else "; a progress bar on a terminal"
+    note(args, f"{what}: checkpoints in {args.out}/ (Ctrl-C saves one; continue with "
+               f"--resume){bar}")
+
+
 def resume_hint(args, checkpoint):
     """How ``qsa reproduce`` continues an interrupted run (the checkpoint lives in --out)."""
     return f"{args.qsa_prog} --resume --out {args.out} (and the other options as before)"

@@ -16,6 +16,7 @@ from qsa.commands._simulations import (
     fmt,
     progress,
     save_figures,
+    start_note,
 )
 
 HELP = "faceting coarsening: ~18 fronts -> 6 (rounded triangle), energy + R_kappa (f:facet)"
@@ -61,6 +62,8 @@ def run(args):
 
     sc = replace(FacetScenario(), seed=args.seed)
     check_resume(args, ["facet"])
+    start_note(args, f"faceting coarsening at N = {sc.N} to t = "
+                     f"{sc.t_final if args.t_final is None else args.t_final:g}")
     result = run_facet(sc, args.out, t_final=args.t_final, resume=args.resume,
                        progress=progress(args))
     s = result.summary()

@@ -26,6 +26,7 @@ from qsa.commands._simulations import (
     emit,
     progress,
     save_figures,
+    start_note,
 )
 
 HELP = "CHA folding for rho = 1.2, 1.3, 1.4 from identical data (f:fold, Table T1)"
@@ -47,6 +48,8 @@ def run(args):
 
     scenarios = [cha_scenario(args, rho) for rho in args.rho]
     check_resume(args, [cha_run_name(sc) for sc in scenarios])
+    start_note(args, f"{len(scenarios)} CHA flows (rho = {', '.join(f'{r:g}' for r in args.rho)})"
+                     f", N = {args.N or scenarios[0].N}")
     folding = run_folding(scenarios, args.out,
                           t_final=args.t_final, N=args.N, resume=args.resume,
                           progress=progress(args))

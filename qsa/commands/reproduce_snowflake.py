@@ -25,6 +25,7 @@ from qsa.commands._simulations import (
     emit,
     progress,
     save_figures,
+    start_note,
 )
 
 HELP = "CHA adhesion flow from the crenellated start, rho=1.3 (f:Snowflake, Table T1)"
@@ -48,6 +49,8 @@ def run(args):
 
     sc = cha_scenario(args, args.rho)
     check_resume(args, [cha_run_name(sc)])
+    start_note(args, f"CHA flow, rho = {sc.rho:g}, N = {args.N or sc.N}, to t = "
+                     f"{sc.t_final if args.t_final is None else args.t_final:g}")
     summary, lines = {}, []
     if args.check_resolution:
         rc = resolution_check(sc, args.N, args.check_resolution, progress=progress(args))

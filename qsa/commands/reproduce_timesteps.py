@@ -53,9 +53,13 @@ def add_arguments(p):
 
 
 def run(args):
+    from qsa.commands._errors import note
     from qsa.paper import CONVERGENCE, run_timesteps
 
     paper_steps = CONVERGENCE.paper_steps
+    n_tols = len(args.tols) if args.tols else len(paper_steps)
+    note(args, f"running the appendix example for {n_tols} tolerances with backward Euler"
+               + ("" if args.no_bdf2 else " and BDF2") + " (the smallest takes longest)")
     steps = run_timesteps(CONVERGENCE, args.tols, N=args.N, t_final=args.t_final,
                           force_normal=args.normal, bdf2=not args.no_bdf2)
     tols, be, bdf = steps.tols, steps.be, steps.bdf2

@@ -58,7 +58,8 @@ def run(args):
     eq = equilibrium.build_polished(args)
     N = eq.curve.N
     require(args, f"the spectrum at N = {N}" + ("" if args.k is None else f" (k = {args.k})"),
-            spectrum_bytes(N, fourier=not eq.curve.grid.sparse, k=args.k),
+            spectrum_bytes(N, fourier=not eq.curve.grid.sparse, k=args.k,
+                           reject=not args.no_reject),
             "use a smaller --N, or --k K (the K eigenvalues nearest --sigma)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotEquilibriumWarning)

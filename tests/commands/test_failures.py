@@ -263,6 +263,16 @@ def test_splice_facets_changed_by_closure_are_reported(capsys):
     assert code == 0 and "warning" not in err  # facets that close: nothing to say
 
 
+def test_reproduce_resume_without_a_checkpoint_says_it_starts_afresh(tmp_path, capsys):
+    code, out, err = run(capsys, "reproduce", "snowflake", "--resume", "--out", tmp_path,
+                         "--t-final", "1e-6", "--kernel-length", "0.1", "--N", "300",
+                         "--no-plots", "--json")
+    assert code == 0, err
+    warning = [line for line in err.splitlines() if "warning" in line]
+    assert len(warning) == 1 and "no checkpoint" in warning[0] and "from t = 0" in warning[0]
+    assert json.loads(out)["t_reached"] == pytest.approx(1e-6)
+
+
 # ------------------------------------------------------ subprocess: pipes, signals
 def test_output_piped_into_a_closed_reader_exits_quietly(tmp_path):
     proc = qsa_subprocess(["equilibrium", "circle", "--radius", "1", "--alpha", "0.1", "--N",
