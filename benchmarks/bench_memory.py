@@ -27,6 +27,7 @@ import sys
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)  # the qsa of this checkout, as in the measured subprocesses
 
 #: kind -> (command line with {N}, sizes); the kind is a key of FOOTPRINTS
 RUNS = {

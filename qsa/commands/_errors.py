@@ -151,7 +151,8 @@ def run_command(func, args) -> int:
             _error(args, f"interrupted{at}; checkpoint saved in {checkpoint}; continue with: "
                          f"{how}")
         else:
-            _error(args, "interrupted")
+            hint = getattr(args, "interrupt_hint", None)
+            _error(args, "interrupted" + (f"; {hint(args)}" if hint else ""))
         return EXIT_INTERRUPTED
     except MemoryError as exc:
         detail = f" ({exc})" if str(exc) else ""

@@ -35,8 +35,14 @@ def resume_hint(args, checkpoint):
     return f"{args.qsa_prog} --resume --out {args.out} (and the other options as before)"
 
 
-def common_arguments(parser, default_out, t_final_help):
-    """Options of the paper's simulations: output folder, final time, resume, progress."""
+def common_arguments(parser, default_out, t_final_help=None):
+    """Options of the paper's simulations: output folder, final time, resume, progress.
+
+    ``t_final_help`` states the default final time (e.g. ``"2.5, the paper's last
+    figure time"``); give the number, so that ``--help`` says what the run does.
+    """
+    if t_final_help is None:
+        t_final_help = "the scenario's t_final"
     parser.add_argument("--out", default=default_out, metavar="DIR",
                         help=f"output folder for data, figures and checkpoints "
                              f"(default ./{default_out})")

@@ -56,7 +56,8 @@ def add_parser(sub):
                    help="y column of --plot (default by study: residual, lambda_0, ...)")
     p.add_argument("--progress", action=argparse_bool(), default=None,
                    help="progress bar (default: on a terminal)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, interrupt_hint=lambda args: f"the points finished are kept in "
+                   f"{args.out}/points; the same command computes the others")
     return p
 
 
