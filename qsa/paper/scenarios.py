@@ -35,8 +35,8 @@ from qsa.flows.models import CHA, FacetingFlow
 from qsa.resample import resample_closed
 
 __all__ = ["FacetScenario", "CHAScenario", "FoldBalance", "ConvergenceScenario", "CONVERGENCE",
-           "Scenario", "SCENARIOS", "front_scenario", "scenario_splice", "crenellated_radius",
-           "perturbed_circle_radius"]
+           "Scenario", "SCENARIOS", "random_polygon", "front_scenario", "scenario_splice",
+           "crenellated_radius", "perturbed_circle_radius"]
 
 #: oversampling of the analytic curve before resampling to equal chords
 _FINE = 8
@@ -449,6 +449,49 @@ SCENARIOS = {
         "short-facet", (90.0, 90.0, 80.0, 100.0), (0.5, 0.28, 0.5, 0.35),
         "quadrilateral (right trapezoid) with one short facet that collapses", 0.09),
 }
+
+
+def random_polygon(n_corners, seed, *, facets=(0.4, 0.6), short=(0.26, 0.3), n_short=1,
+                   angle_spread=0.15, t_final=1.0, **params):
+    """A rounded polygon with random unequal corners and facets, ``n_short`` of them short.
+
+    Exterior angles ``360/n (1 + angle_spread u_i)`` (``u_i`` uniform on ``[-1, 1]``,
+    rescaled to sum to 360 degrees); facets uniform in ``facets``, except ``n_short``
+    at random places uniform in ``short`` (these collapse first, in the order of their
+    lengths up to the interactions). Drawn from ``numpy.random.default_rng(seed)``.
+
+    Parameters
+    ----------
+    n_corners, seed : int
+    facets, short : (float, float)
+    n_short : int
+    angle_spread : float
+    t_final : float
+    **params
+        ``alpha``, ``kstar``, ``beta`` of the :class:`Scenario`.
+
+    Returns
+    -------
+    Scenario
+
+    Examples
+    --------
+    >>> sc = random_polygon(5, seed=3)
+    >>> len(sc.angles), round(sum(sc.angles), 9), sum(f < 0.3 for f in sc.facets)
+    (5, 360.0, 1)
+    """
+    n = int(n_corners)
+    if n < 3 or not 0 <= int(n_short) < n:
+        raise ValueError(f"need n_corners >= 3 and 0 <= n_short < n_corners, got "
+                         f"{n_corners!r}, {n_short!r}")
+    rng = np.random.default_rng(seed)
+    a = 1 + angle_spread * rng.uniform(-1, 1, n)
+    angles = tuple(float(x) for x in 360.0 * a / a.sum())
+    f = rng.uniform(*facets, n)
+    idx = rng.choice(n, int(n_short), replace=False)
+    f[idx] = rng.uniform(*short, int(n_short))
+    return Scenario(f"random-{n}-{seed}", angles, tuple(float(x) for x in f),
+                    f"random polygon with {n} corners (seed {seed})", float(t_final), **params)
 
 
 def front_scenario(scenario, **overrides):
