@@ -43,7 +43,7 @@ def paper_example(Ns, targets):
                                t_eval=[sc.t_final], progress=False)
         target = targets.get(N)
         verdict = "" if target is None else ("ok" if cpu <= target else "MISSED")
-        print(f"{N:>5} {res.n_steps:>6} {res.n_newton:>7} {res.n_factorizations:>5} "
+        print(f"{N:>5} {res.n_steps:>6} {res.n_newton:>7} {res.n_lu:>5} "
               f"{cpu:>8.2f} {wall:>9.2f} {target if target else '':>7} {verdict}")
 
 
@@ -69,7 +69,7 @@ def cost_per_step(title, Ns, make_model, first_step, steps=4, target=None):
         per = (stamps[-1] - stamps[0]) / (len(stamps) - 1)
         costs.append(per)
         print(f"{N:>7} {res.system.size:>9} {res.n_steps:>6} "
-              f"{res.n_newton / res.n_steps:>11.1f} {res.n_factorizations / res.n_steps:>8.2f} "
+              f"{res.n_newton / res.n_steps:>11.1f} {res.n_lu / res.n_steps:>8.2f} "
               f"{per:>13.4f} {1e6 * per / N:>8.2f}")
     p = np.polyfit(np.log(Ns), np.log(costs), 1)[0]
     verdict = "" if target is None else (

@@ -45,7 +45,7 @@ def main():
     rows = []
     for grid in (Fourier(255), Fourier(1023), FiniteDifference(1000), FiniteDifference(10_000)):
         r, dt = run(grid)
-        rows.append((type(grid).__name__, grid.N, r.n_iter, dt, dt / max(r.n_iter, 1),
+        rows.append((type(grid).__name__, grid.N, r.n_newton, dt, dt / max(r.n_newton, 1),
                      r.residual / r.residual_scale, r.closure, r.status))
     print(f"{'grid':<18}{'N':>7}{'steps':>7}{'time [s]':>11}{'s/step':>10}"
           f"{'max|Vn|/scale':>15}{'|C(U)|':>10}{'status':>8}")

@@ -45,7 +45,7 @@ def backends():
 
 
 def ode_cpu(scenario, correction=None, variable=False, backend="numpy", repeat=5):
-    """Best-of-``repeat`` CPU time of the ODE alone (to its first collision), nfev, ``t_c``."""
+    """Best-of-``repeat`` CPU time of the ODE alone (to its first collision), n_rhs, ``t_c``."""
     sc = SCENARIOS[scenario]
     eq = sc.splice()
     p = np.array(eq.params["positions"])
@@ -59,7 +59,7 @@ def ode_cpu(scenario, correction=None, variable=False, backend="numpy", repeat=5
         r = ode.integrate(p, sc.t_final, max_collisions=0, **opts)
         best = min(best, time.process_time() - t0)
     tc = r.first_collision.time if r.events else np.nan
-    return best, r.nfev, tc
+    return best, r.n_rhs, tc
 
 
 def eval_us(scenario, correction=None, variable=False, backend="numpy", number=200):
@@ -100,15 +100,15 @@ def main(Ns):
             print(f"  {N:5d} {c.time_dae:7.2f} {c.n_steps_dae:6d} {c.collision_dae:9.5f}")
         head = "".join(f" {'x DAE ' + str(N):>11s}" for N in Ns)
         diff = "".join(f" {'%/' + str(N):>7s}" for N in Ns)
-        print(f"  {'reduction':22s} {'backend':>7s} {'cpu s':>7s} {'nfev':>5s} {'us/nfev':>7s}"
+        print(f"  {'reduction':22s} {'backend':>7s} {'cpu s':>7s} {'n_rhs':>5s} {'us/rhs':>7s}"
               f"{head} {'t_c':>10s}{diff}")
         for correction, variable in VARIANTS:
             for backend in backends():
-                cpu, nfev, tc = ode_cpu(name, correction, variable, backend)
+                cpu, n_rhs, tc = ode_cpu(name, correction, variable, backend)
                 label = f"{correction or 'none'}, {'variable' if variable else 'fixed'} L"
                 sp = "".join(f" {dae[N][0] / cpu:11.0f}" for N in Ns)
                 rel = "".join(f" {100 * (tc / dae[N][1] - 1):+7.2f}" for N in Ns)
-                print(f"  {label:22s} {backend:>7s} {cpu:7.4f} {nfev:5d} {1e6 * cpu / nfev:7.0f}"
+                print(f"  {label:22s} {backend:>7s} {cpu:7.4f} {n_rhs:5d} {1e6 * cpu / n_rhs:7.0f}"
                       f"{sp} {tc:10.7f}{rel}")
 
 

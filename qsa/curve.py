@@ -7,7 +7,7 @@ Everything else is derived (paper section 2, e:tau-n, e:theta-kappa, e:C1-e:C2):
 
 * ``theta = theta0 + D kappa``, with ``D f = int_0^s f dsigma``;
 * ``tau = (cos theta, sin theta)``, ``n = (sin theta, -cos theta)`` (outward for
-  counter-clockwise curves, MATH.md section 1);
+  counter-clockwise curves, Conventions and errata, section 1);
 * ``gamma = gamma0 + D tau``;
 * the closure ``C(U) = (int tau dsigma, int kappa dsigma - 2 pi)``.
 
@@ -256,6 +256,29 @@ class Curve:
         tau = self.tangent()
         return np.array([tau[0] @ self.dsigma, tau[1] @ self.dsigma,
                          self.kappa @ self.dsigma - 2 * np.pi])
+
+    def area(self) -> float:
+        """Enclosed area ``A = 1/2 int gamma . n dsigma`` (positive for counter-clockwise curves).
+
+        With ``gamma = gamma0 + D tau`` and the outward normal ``n``, evaluated with the
+        grid's quadrature. It is the discrete area whose exact derivatives
+        :func:`qsa.constraints.area_gradient` and :func:`qsa.constraints.area_hessian`
+        compute; on a closed curve it does not depend on the base point ``gamma0``.
+
+        Returns
+        -------
+        float
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, Fourier
+        >>> round(Curve.circle(2.0, Fourier(17), center=(1.0, -3.0)).area() / np.pi, 12)
+        4.0
+        """
+        x, y = self.positions()
+        th = self.theta()
+        return float(0.5 * (x * np.sin(th) - y * np.cos(th)) @ self.dsigma)
 
     def grad_s(self, f) -> np.ndarray:
         """Surface gradient ``nabla_s f = (1/g) df/ds`` at the nodes.

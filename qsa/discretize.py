@@ -10,7 +10,7 @@ Two discretizations share one interface:
 ``Fourier(N)``
     Pseudo-spectral differentiation on N equispaced nodes (odd N only: with even
     N the derivative annihilates the Nyquist mode, which then shows up as a fake
-    eigenvalue, MATH.md section 4). Operators are dense ``ndarray``.
+    eigenvalue, Conventions and errata, section 4). Operators are dense ``ndarray``.
 
 Besides the nodal derivative, each grid exposes an *edge* pair used by energies
 that contain ``|grad_s kappa|^2``: ``edge_difference`` (nodes -> edges) and
@@ -37,7 +37,7 @@ from scipy.interpolate import CubicSpline
 
 from qsa._checks import integer
 
-__all__ = ["Grid", "FiniteDifference", "Fourier", "MIN_NODES"]
+__all__ = ["Grid", "FiniteDifference", "Fourier", "MIN_NODES", "cumulative_factors"]
 
 #: Smallest number of nodes a grid accepts.
 MIN_NODES = 8
@@ -47,6 +47,37 @@ def _check_N(N, kind):
     return integer(N, "N", minimum=MIN_NODES, what="number of nodes",
                    too_small="{name}={value} is too small for a " + kind
                    + " grid: need {name} >= {minimum}")
+
+
+def cumulative_factors(N):
+    """Sparse ``(Bd, R)`` with ``Bd^{-1} R`` the trapezoid cumulative integral on N nodes.
+
+    ``(Bd z)_0 = z_0``, ``(Bd z)_j = z_j - z_{j-1}``; ``(R f)_0 = 0``,
+    ``(R f)_j = (f_{j-1} + f_j) / (2 N)``: ``z = Bd^{-1} R f`` is
+    :meth:`FiniteDifference.cumulative`. Operators that contain the cumulative
+    integral (``D`` of e:D_def) become sparse equations for an implicit state.
+
+    Parameters
+    ----------
+    N : int
+
+    Returns
+    -------
+    Bd, R : scipy.sparse.csr_matrix, shape (N, N)
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse.linalg as spla
+    >>> Bd, R = cumulative_factors(8)
+    >>> f = np.arange(8.0) ** 2
+    >>> bool(np.allclose(spla.spsolve(Bd.tocsc(), R @ f), FiniteDifference(8).cumulative(f)))
+    True
+    """
+    N = int(N)
+    Bd = (sp.identity(N) - sp.eye(N, k=-1)).tocsr()
+    R = sp.lil_matrix(0.5 / N * (sp.identity(N) + sp.eye(N, k=-1)))
+    R[0, 0] = 0.0
+    return Bd, R.tocsr()
 
 
 def _as_values(f, N, name="f"):
@@ -532,7 +563,7 @@ class Fourier(Grid):
     N : int
         Number of nodes; odd and ``>= 9``. Even N is refused: the spectral
         derivative then annihilates the Nyquist mode, which would appear as a
-        spurious eigenvalue (MATH.md section 4).
+        spurious eigenvalue (Conventions and errata, section 4).
 
     Examples
     --------

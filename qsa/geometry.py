@@ -1,6 +1,6 @@
 """Operators of the intrinsic formulation: M, its dsigma-adjoint, kernels, constraint Hessians.
 
-All adjoints are taken in ``<f, h> = int f h dsigma`` (MATH.md section 1); the
+All adjoints are taken in ``<f, h> = int f h dsigma`` (Conventions and errata, section 1); the
 discrete adjoint of a matrix ``A`` is ``W^{-1} A^T W`` with ``W = diag(dsigma)``
 (block-diagonal on stacked ``[kappa, g]``).
 
@@ -16,7 +16,7 @@ Discrete operators (finite differences use the paper's second-order stencils):
 Notes
 -----
 Equations: e:Meq, e:FSFF (M), e:CVE (M-dagger), lem:kerM (rigid motions),
-e:Psi1-e:Psi3 (Psi, in the position form of MATH.md section 2), e:cC-Hessian
+e:Psi1-e:Psi3 (Psi, in the position form of Conventions and errata, section 2), e:cC-Hessian
 and e:cC-Hessian3 (constraint Hessians; the printed ones are wrong, see the
 NOTE in :func:`constraint_hessians`).
 """
@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from qsa.closure import closure_hessian, curvature_closure_hessian
 from qsa.curve import Curve
 
 __all__ = [
@@ -253,7 +254,7 @@ def MMdagger(c: Curve):
     """The geometric prefactor ``M M-dagger`` built as the product.
 
     # NOTE: the paper's printed MM-dagger display has wrong (2,1) and (2,2)
-    # entries (MATH.md section 2); the product is exact by construction.
+    # entries (Conventions and errata, section 2); the product is exact by construction.
 
     Parameters
     ----------
@@ -345,7 +346,8 @@ def constraint_gradients(c: Curve) -> np.ndarray:
 
     Notes
     -----
-    # NOTE: position form (MATH.md section 2): Psi1 = (y - y0, (kappa (y - y0) + tau_x)/g),
+    # NOTE: position form (Conventions and errata, section 2):
+    # Psi1 = (y - y0, (kappa (y - y0) + tau_x)/g),
     # Psi2 = (-(x - x0), (-kappa (x - x0) + tau_y)/g), Psi3 = (1, kappa/g). It equals
     # the paper's D-dagger form e:Psi1-e:Psi2 on closed curves but, unlike it, converges
     # with second-order differences -- with the positions' closure gap spread over S
@@ -434,7 +436,7 @@ def D_adjoint_matrix(c: Curve) -> np.ndarray:
     return c.dsigma[None, :] - D_matrix(c)
 
 
-def constraint_hessians(c: Curve) -> list:
+def constraint_hessians(c: Curve, form="dense") -> list:
     """Second variations of the closure constraints ``C_1, C_2, C_3``.
 
     With ``C(U + delta U1) = C + delta <Psi, U1> + delta^2/2 <H_C U1, U1>``: Hessians
@@ -443,24 +445,26 @@ def constraint_hessians(c: Curve) -> list:
     Parameters
     ----------
     c : Curve
+    form : {"dense", "factored", "auto"}
+        How ``H_C1``, ``H_C2`` are returned (:func:`qsa.closure.closure_hessian`):
+        dense ndarrays (default, O(N^2) memory) or, on finite-difference grids,
+        :class:`~qsa.linalg.ReducedHessian` (O(N) storage and products).
 
     Returns
     -------
     list of three matrices, shape (2N, 2N)
-        ``H_C1``, ``H_C2`` are dense (they contain the integral operators D and
-        D-dagger, O(N^2) memory); ``H_C3`` has the grid's matrix type. Each is
-        exactly dsigma-self-adjoint (H_C1 and H_C2 are symmetrised).
+        ``H_C1``, ``H_C2`` (they contain the integral operators D and D-dagger);
+        ``H_C3`` has the grid's matrix type. Each is exactly dsigma-self-adjoint
+        (H_C1 and H_C2 are symmetrised).
 
     Notes
     -----
-    # NOTE: e:cC-Hessian and e:cC-Hessian3 as printed are wrong (MATH.md section 4).
-    # Implemented: H_C3 = [[0, 1/g], [1/g, 0]], and for j = 1, 2 with
+    # NOTE: e:cC-Hessian and e:cC-Hessian3 as printed are wrong (Conventions and errata, section 4).
+    # Implemented (qsa.closure): H_C3 = [[0, 1/g], [1/g, 0]], and for j = 1, 2 with
     # eta = kappa1 + kappa g1/g, B = D-dagger(tau'_j g1/g), C = D-dagger(tau_j D eta):
     #   (H_Cj U1)_kappa = (g1/g) D-dagger tau'_j + B - C,
     #   (H_Cj U1)_g     = (kappa1/g) D-dagger tau'_j + tau'_j (D eta)/g + (kappa/g)(B - C).
-    # D-dagger(tau_j D eta) is evaluated by parts (its integrand is not periodic
-    # when int eta dsigma != 0), so all quadratures act on periodic integrands.
-    # B, D eta and C still jump across s = 0 == 1; with the mean value at node 0 the
+    # B, D eta and C jump across s = 0 == 1; with the mean value at node 0 the
     # quadratic form is second order on both grid kinds (checked against exact
     # second differences of C in the tests).
 
@@ -478,44 +482,10 @@ def constraint_hessians(c: Curve) -> list:
     >>> bool(np.allclose(second, exact, atol=1e-2 * np.abs(exact).max()))  # O(h^2)
     True
     """
-    grid = c.grid
-    N = c.N
-    k, g = c.kappa, c.g
-    th = c.theta()
-    tau = np.array([np.cos(th), np.sin(th)])
-    taup = np.array([-np.sin(th), np.cos(th)])  # d tau / d theta = -n
-    # D f and D-dagger f jump across s = 0 == 1 when int f dsigma != 0. The quadratic
-    # form integrates (periodic) x (one such function); taking the mean of the two
-    # one-sided limits at node 0 turns the periodic rule into the trapezoid rule for it.
-    D = D_matrix(c)
-    D[0] = 0.5 * c.dsigma
-    Dd = c.dsigma[None, :] - D
-    # eta = [I, diag(k/g)] U1 ; D eta
-    Eta = np.hstack([np.eye(N), np.diag(k / g)])
-    DEta = D @ Eta
-    hessians = []
-    for j in range(2):
-        Dd_taup = Dd @ taup[j]
-        Bop = Dd @ np.hstack([np.zeros((N, N)), np.diag(taup[j] / g)])
-        # C = D-dagger(tau_j D eta) by parts, so that every integrand is periodic:
-        # with A_j = D tau_j (periodic on closed curves),
-        # C = A_j(1) (D eta)(1) - A_j (D eta) - D-dagger(A_j eta).
-        Aj = D @ tau[j]
-        Aj1 = tau[j] @ c.dsigma
-        total = np.outer(np.ones(N), c.dsigma) @ Eta
-        Cop = Aj1 * total - Aj[:, None] * DEta - Dd @ (Aj[:, None] * Eta)
-        BC = Bop - Cop
-        top = np.hstack([np.zeros((N, N)), np.diag(Dd_taup / g)]) + BC
-        bottom = (np.hstack([np.diag(Dd_taup / g), np.zeros((N, N))])
-                  + (taup[j] / g)[:, None] * DEta + (k / g)[:, None] * BC)
-        H = np.vstack([top, bottom])
-        # The quadratic form is what is defined; symmetrise in dsigma (exactly self-adjoint).
-        hessians.append(0.5 * (H + adjoint(c, H)))
-    inv_g = grid.diag(1.0 / g)
-    hessians.append(_bmat([[None, inv_g], [inv_g, None]], grid) if grid.sparse
-                    else np.block([[np.zeros((N, N)), np.diag(1 / g)],
-                                   [np.diag(1 / g), np.zeros((N, N))]]))
-    return hessians
+    if form not in ("dense", "factored", "auto"):
+        raise ValueError(f"form must be 'dense', 'factored' or 'auto', got {form!r}")
+    return [closure_hessian(c, np.eye(3)[0], form), closure_hessian(c, np.eye(3)[1], form),
+            curvature_closure_hessian(c)]
 
 
 def reparameterization_mode(c: Curve, v) -> np.ndarray:

@@ -329,14 +329,14 @@ class ReducedHessian:
 
         With invertible diagonal ``Lf = diag(l)``, ``Rf = diag(r)`` (the energies'
         case) the unknowns are ``[r x, y, mu]`` (sizes p, m, m), the right-hand side
-        ``[b / l, 0, 0]`` and the matrix
+        ``[b / l, 0, 0]`` and the matrix ::
 
             [[diag(1/l) (S0 - sigma B) diag(1/r) + Luu, Lyu^T, cU^T],
              [Lyu, Lyy, cY^T],
              [cU, cY, 0]];
 
         eliminating ``mu`` and ``y = Z (r x)`` leaves ``diag(1/l) (H - sigma B - U V^T) x``.
-        Otherwise the unknowns are ``[x, u, y, mu, v]`` (sizes n, p, m, m, p) and the rows
+        Otherwise the unknowns are ``[x, u, y, mu, v]`` (sizes n, p, m, m, p) and the rows ::
 
             (S0 - sigma B) x + Lf v = b,       Rf x - u = 0,
             Luu u + Lyu^T y + cU^T mu - v = 0, Lyu u + Lyy y + cY^T mu = 0,
@@ -437,6 +437,14 @@ class ReducedHessian:
             if other.shape != self.shape:
                 raise ValueError(f"shapes {self.shape} and {other.shape} do not match")
             bd = lambda a, b: sp.block_diag([a, b], format="csr")
+            if _same(self.left, other.left) and _same(self.right, other.right):
+                # one core on the same unknowns: stack the states, keep Lf and Rf (so a
+                # diagonal scaling stays diagonal and augmented() stays compact)
+                return ReducedHessian(self.Luu + other.Luu, sp.vstack([self.Lyu, other.Lyu]),
+                                      bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
+                                      sp.vstack([self.cU, other.cU]), self.left, self.right,
+                                      self.S + other.S, np.hstack([self.U, other.U]),
+                                      np.hstack([self.V, other.V]))
             return ReducedHessian(bd(self.Luu, other.Luu), bd(self.Lyu, other.Lyu),
                                   bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
                                   bd(self.cU, other.cU), sp.hstack([self.left, other.left]),
@@ -472,6 +480,11 @@ class ReducedHessian:
     def __repr__(self):
         return (f"ReducedHessian(shape={self.shape}, state={self.cY.shape[0]}, nnz={self.nnz}, "
                 f"rank={self.U.shape[1]})")
+
+
+def _same(A, B) -> bool:
+    """Whether two sparse matrices are equal entry by entry."""
+    return A.shape == B.shape and (A != B).nnz == 0
 
 
 def to_dense(A) -> np.ndarray:

@@ -6,16 +6,16 @@ picklable by reference, so they run on a process pool or a Dask cluster.
 
 ``npulse_study``
     The N-pulse faceted equilibrium of ``Faceting + Perimeter`` (e:Facet-CP,
-    e:Fint; MATH.md section 5): residual, closure, L, L*, nu2, energy.
+    e:Fint; Conventions and errata, section 5): residual, closure, L, L*, nu2, energy.
 ``spectrum_study``
-    Its spectrum (linearization ``-MM-dagger L_Lambda``, MATH.md section 4;
+    Its spectrum (linearization ``-MM-dagger L_Lambda``, Conventions and errata, section 4;
     :mod:`qsa.spectra`): unstable count, kernel dimension, leading eigenvalues.
 ``circle_spectrum_study``
-    The circle's spectrum against the closed form of MATH.md section 4
+    The circle's spectrum against the closed form of Conventions and errata, section 4
     (:func:`circle_eigenvalues`), on Fourier or finite-difference grids.
 ``splice_spectrum_study``
     The small eigenvalues of a heteroclinic splice (a rounded polygon) and the
-    predicted scale ``exp(-kstar d_min / (sqrt(2) alpha))`` (MATH.md section 5).
+    predicted scale ``exp(-kstar d_min / (sqrt(2) alpha))`` (Conventions and errata, section 5).
 ``flow_rate_study``
     A circle perturbed along an eigenfunction, evolved by the DAE faceting flow
     (:mod:`qsa.flows`): the measured growth/decay rate against the eigenvalue.
@@ -147,8 +147,8 @@ def circle_eigenvalues(R, alpha, kstar=5.0, beta=5.0, kmax=8, well=None):
     """Closed-form eigenvalues ``lambda_k`` of ``J`` on the faceting circle, ``k = 0..kmax``.
 
     ``lambda_k = -((k^2 - 1)^2 / R^4) (alpha^2 k^2 / R^2 + W''(1/R)) - delta_k0 2 pi beta / R``
-    (MATH.md section 4): mode ``cos k theta``; ``k = 1`` (translations) is 0 and every
-    ``k >= 1`` is double.
+    (Conventions and errata, section 4): mode ``cos k theta``; ``k = 1`` (translations)
+    is 0 and every ``k >= 1`` is double.
 
     Returns
     -------

@@ -95,3 +95,11 @@ def assert_hessian_matches_energy(E, c, directions, rtol=2e-6, column_rtol=1e-7)
         assert np.abs(col - ref).max() <= column_rtol * np.abs(ref).max()
     A = W[:, None] * Hd
     assert np.abs(A - A.T).max() <= 1e-12 * np.abs(A).max()
+
+
+def assert_status_convention(result, messages):
+    """The result convention of qsa: ``success == (status >= 0)``, the message starts with
+    ``messages[status]`` (the result module's ``MESSAGES`` table)."""
+    assert result.status in messages, (result.status, sorted(messages))
+    assert bool(result.success) == (result.status >= 0), (result.success, result.status)
+    assert result.message.startswith(messages[result.status]), result.message

@@ -24,6 +24,8 @@ FORBIDDEN = {
     "continuation": {"flows", "plotting"},
     "reduction": {"plotting"},
     "geometry": {"energies", "equilibria", "spectra", "flows", "continuation"},
+    "constraints": {"energies", "equilibria", "spectra", "flows", "continuation"},
+    "closure": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "curve": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "discretize": {"curve", "geometry", "energies", "equilibria", "spectra", "flows"},
     "plotting": set(),

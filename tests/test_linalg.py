@@ -64,6 +64,20 @@ def test_algebra_stays_factored():
     assert isinstance(dense_sum, np.ndarray) and np.allclose(dense_sum, D + np.eye(7))
 
 
+def test_sum_on_the_same_scaling_stacks_the_states():
+    """Equal left and right factors: one core with both states, still the compact system."""
+    H, D = random_reduced(8, low_rank=1)
+    H2, D2 = random_reduced(9, m=4)
+    H2 = ReducedHessian(H2.Luu, H2.Lyu, H2.Lyy, H2.cY, H2.cU, left=H.left, S=H2.S)
+    D2 = H2.toarray()
+    total = H + H2
+    assert total.left.shape == (7, 7) and total.cY.shape == (9, 9)
+    assert np.allclose(total.toarray(), D + D2)
+    assert total.augmented(0.0).shape[0] == 7 + 2 * 9
+    b = np.linspace(-1, 1, 7)
+    assert np.allclose((D + D2 - 0.2 * np.eye(7)) @ (total.shift_invert(0.2) @ b), b)
+
+
 @pytest.mark.parametrize("low_rank", [0, 2])
 def test_shift_invert(low_rank):
     H, D = random_reduced(5, low_rank=low_rank)

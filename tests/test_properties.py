@@ -3,9 +3,10 @@
 Curves: ``r(phi) = R (1 + sum_k (a_k cos k phi + b_k sin k phi) / k^2)``, k = 2..5, random
 R, a, b (star-shaped, convex or not), on Fourier and finite-difference grids.
 
-- ker M (lem:kerM): ``M rigid = 0``; ker M-dagger: ``M-dagger Psi_j = 0`` (MATH.md 2).
+- ker M (lem:kerM): ``M rigid = 0``; ker M-dagger: ``M-dagger Psi_j = 0`` (Conventions,
+  section 2).
 - Rigid invariance: energies unchanged by a rigid motion of the curve; the extrinsic
-  gradient ``-V^n`` is orthogonal to the rigid normal velocities (MATH.md 6) and
+  gradient ``-V^n`` is orthogonal to the rigid normal velocities (Conventions, section 6) and
   e:W-invar ``[M-dagger grad_I E]_2 = 0`` holds at every U.
 - ``<grad_I E, U1> = dE/dt (U + t U1)`` at t = 0 (central differences) for
   Faceting, CanhamHelfrich, Perimeter and Adhesion.

@@ -8,7 +8,7 @@ node 2j of 2N), componentwise as the paper's code measures position errors.
 
 Findings printed with the table:
 
-* time. The table's "t = 0.1" is physical time 0.2 (MATH.md section 7): the
+* time. The table's "t = 0.1" is physical time 0.2 (Conventions and errata, section 7): the
   paper's code advances its clock by k per accepted pass of two steps of k.
 * discretization. The code behind the paper evaluates the adhesion force
   along the centred-difference normal ``(X_{j+1} - X_{j-1})^perp / (2 h L)``,
@@ -105,7 +105,7 @@ def run(args):
             line += f" | {d:>15.4f} {r:>5.2f} {d / p if p else np.nan:>6.2f}"
         print(line)
     print("\nWhy t = 0.2: the paper's code advances its clock by k per accepted pass of two "
-          "steps of k,\nso its 't = 0.1' is physical time 0.2 (MATH.md section 7).")
+          "steps of k,\nso its 't = 0.1' is physical time 0.2 (Conventions and errata, section 7).")
     print("Why two columns: the code behind the paper projects the adhesion force on the "
           "centred-difference\nnormal (X_{j+1} - X_{j-1})^perp / (2hL), whose length is "
           "1 - O(h^2); qsa's default is the unit\nnormal. Both converge at second order; "

@@ -92,7 +92,7 @@ def _report(s):
                      f"({100 * d['collision_rel_diff']:.2f}%), positions {_errors_to(d)}, "
                      f"{100 * d['max_error']:.1f}% up to the first collision")
     lines.append(f"CPU time: DAE {s['time_dae']:.2f} s ({s['n_steps_dae']} steps), ODE "
-                 f"{s['time_ode']:.3f} s ({s['nfev_ode']} evaluations): "
+                 f"{s['time_ode']:.3f} s ({s['n_rhs_ode']} evaluations): "
                  f"{s['speedup']:.0f}x")
     for name, e in s.get("eigenvalues", {}).items():
         pairs = zip(e["reduced"], e["full"], strict=True)

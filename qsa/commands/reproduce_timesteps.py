@@ -5,7 +5,7 @@ with local error tolerances 1e-3 ... 1e-6 and reports 65, 180, 571 and 1811
 time steps: x sqrt(10) per decade, as a local error O(k^2) controlled per pass
 implies. qsa counts accepted step-doubling passes (two backward Euler steps of k
 plus the 2k step of the error estimate), like the paper's code, at physical
-time t = 0.2 (MATH.md section 7: the code's clock advances by k per pass of
+time t = 0.2 (Conventions and errata, section 7: the code's clock advances by k per pass of
 2k). The BDF2 column shows what the second-order method needs for the same
 local tolerance (its steps grow like tol^(-1/3)).
 """

@@ -409,7 +409,7 @@ class Perimeter(Energy):
     Notes
     -----
     Gradient ``(0, beta (L - L*) / g)``. The Hessian is rank one,
-    ``(H U1)_g = (beta / g) int g1 ds`` (MATH.md section 4); on finite-difference
+    ``(H U1)_g = (beta / g) int g1 ds`` (Conventions and errata, section 4); on finite-difference
     grids it is returned factored as :class:`~qsa.linalg.SparsePlusLowRank`.
 
     Examples

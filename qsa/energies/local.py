@@ -14,7 +14,7 @@ grid's *edges* or on its *nodes*:
 The faceting energy puts ``alpha^2/2 |nabla_s kappa|^2`` on edges and ``W(kappa)``
 on nodes; Canham-Helfrich puts ``eps/2 kappa^2`` on nodes. With the linear maps
 ``q = E kappa``, ``k_e = A kappa``, ``g_e = A g`` and ``Phi(g_e, q, k_e) =
-g_e f(q/g_e, k_e)``, the exact derivatives of the discrete energy are
+g_e f(q/g_e, k_e)``, the exact derivatives of the discrete energy are ::
 
     dE/dkappa = E^T (w f_p) + A^T (w g_e f_k),   dE/dg = A^T (w (f - p f_p)),
 
@@ -22,7 +22,7 @@ and the Euclidean Hessian is ``T^T B T`` with ``T = [[E, 0], [A, 0], [0, A]]`` a
 the 3x3 block of diagonals ``B = w * d^2 Phi``. The ``<.,.>`` gradient and
 Hessian divide rows by ``dsigma``. In the continuum these are e:FoE_IG,
 ``nabla_I E = (-nabla_s F_1 + F_0, (-F_1 nabla_s kappa + F)/g)``, and e:cF-Hessian
-(MATH.md: that printed Hessian is right).
+(Conventions and errata, section 4: that printed Hessian is right).
 """
 
 from __future__ import annotations

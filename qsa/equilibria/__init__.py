@@ -5,7 +5,7 @@ the N-fold symmetric faceted equilibrium; ``splice(positions, alpha, length=...)
 ``splice_polygon(angles, facets, alpha)`` -> 2N-front quasi-equilibria closed to 1e-12;
 ``circle(R, alpha, ...)``; ``polish(energy, curve)`` (Newton to the exact discrete
 equilibrium). All but the front return :class:`Equilibrium`. Conventions and the
-corrected signs follow MATH.md section 5. Continuation of equilibria is
+corrected signs follow Conventions and errata, section 5. Continuation of equilibria is
 :mod:`qsa.continuation` (``qsa.equilibria.continuation``, ``Branch``, ``BranchPoint``
 and ``Fold`` remain here as deprecated aliases).
 """

@@ -23,7 +23,7 @@ Unknowns and equations (``N + 4`` each)::
 with unknowns ``x = (kappa, L, a_1, a_2, a_3)``. The unfolding fields ``phi_j`` are the
 normal components of the rigid motions of the initial guess (``e1.n``, ``e2.n``,
 ``(gamma - gamma_c).tau``): on closed curves ``<V^n, phi_j> = 0`` identically
-(``ker M-dagger`` argument, MATH.md section 2), so the ``N + 3`` equations for
+(``ker M-dagger`` argument, Conventions and errata, section 2), so the ``N + 3`` equations for
 ``N + 1`` unknowns are consistent but carry three redundancies; the unfolding
 parameters ``a_j`` make the system square and are zero at the solution (their
 size is reported: it measures how well the discrete identities hold). For
@@ -34,7 +34,7 @@ Jacobian
 --------
 Exact derivatives of the *discrete* residual (verified against central
 differences in the tests). With ``mu = d_kappa E``, ``xi = g d_g E`` (``nabla_I E``
-in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``,
+in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``, ::
 
     V^n = (Delta_s + kappa^2) mu - kappa xi,
     dV^n/dkappa = (Delta_s + kappa^2) H_kk + diag(2 kappa mu - xi) - diag(kappa g) H_gk,
@@ -61,45 +61,65 @@ from qsa._checks import integer, real_number
 from qsa.curve import Curve
 from qsa.discretize import FiniteDifference
 from qsa.energies import Energy
+from qsa.constraints import bind_constraints, constraint_normals
 from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
+from qsa.equilibria.constraint_terms import (
+    area_energy_jacobian,
+    constraint_jacobian,
+    initial_multipliers,
+    split_area_energies,
+)
 from qsa.equilibria.result import Equilibrium
 from qsa.geometry import laplace_s
 from qsa.linalg import SparsePlusLowRank
 
 # multipliers, normal_velocity and residual_scale are properties of the energy on the
 # closed manifold (qsa.energies.constrained); they are re-exported here for old imports.
-__all__ = ["polish", "PolishResult", "EquilibriumSystem", "multipliers", "residual_scale",
-           "normal_velocity"]
+__all__ = ["polish", "PolishResult", "MESSAGES", "NewtonRun", "newton_solve",
+           "EquilibriumSystem", "multipliers", "residual_scale", "normal_velocity"]
 
 _EPS = np.finfo(float).eps
 
-STATUS_MESSAGES = {
+#: Meaning of :attr:`PolishResult.status` (0 success, positive: success with a caveat,
+#: negative: failure); :attr:`PolishResult.message` starts with the entry.
+MESSAGES = {
     0: "converged: relative residual below tol",
     1: "converged to the round-off floor (tol is below what this grid can resolve)",
-    2: "maximum number of Newton iterations reached",
-    3: "singular or non-finite Newton system",
-    4: "line search failed: the residual does not decrease along the Newton direction",
+    -1: "maximum number of Newton iterations reached",
+    -2: "singular or non-finite Newton system",
+    -3: "line search failed: the residual does not decrease along the Newton direction",
 }
+#: Deprecated name of :data:`MESSAGES` (the failure codes were 2, 3, 4; now -1, -2, -3).
+STATUS_MESSAGES = MESSAGES
 
 
 @dataclass(frozen=True, eq=False)
 class PolishResult(Equilibrium):
     """An :class:`Equilibrium` from :func:`polish`, with the Newton record.
 
-    Attributes (besides those of :class:`Equilibrium`)
-    --------------------------------------------------
+    Besides the attributes of :class:`Equilibrium`:
+
+    Attributes
+    ----------
     status : int
-        0 converged to ``tol``, 1 converged to the round-off floor, 2 ``maxiter``
-        reached, 3 singular system, 4 line search failed (see ``STATUS_MESSAGES``).
-    n_iter : int
-        Newton steps taken.
-    history : ndarray, shape (n_iter + 1,)
+        A key of :data:`MESSAGES`: 0 converged to ``tol``, 1 converged to the round-off
+        floor, -1 ``maxiter`` reached, -2 singular system, -3 line search failed.
+        ``success = status >= 0``.
+    n_newton : int
+        Newton steps taken (``n_iter`` is a read-only alias).
+    n_lu : int
+        Factorizations of the Newton matrix.
+    history : ndarray, shape (n_newton + 1,)
         Relative residual of the square system before each step and at the end:
         ``max(max|V^n + a.phi| / scale, |C| / L)``.
     unfolding : ndarray, shape (3,)
         Final unfolding parameters ``a`` (zero up to round-off at a true equilibrium).
     noise_floor : float
         Estimated round-off level of the relative residual on this grid.
+    constraints : tuple of Constraint
+        The bound length / area constraints of the solve (empty without).
+    constraint_multipliers : ndarray, shape (m,)
+        Their multipliers ``mu_i``: ``nabla_I E = Lambda . Psi + sum_i mu_i nabla_I c_i``.
 
     Parameters
     ----------
@@ -110,23 +130,33 @@ class PolishResult(Equilibrium):
     >>> from qsa.equilibria import circle
     >>> eq = circle(1.0, 0.1, kstar=5.0)
     >>> res = polish(eq.energy, eq.curve)
-    >>> bool(res.success), res.status, res.n_iter <= 2
+    >>> bool(res.success), res.status, res.n_newton <= 2
     (True, 0, True)
     """
 
     status: int = 0
-    n_iter: int = 0
+    n_newton: int = 0
+    n_lu: int = 0
     history: np.ndarray = field(default_factory=lambda: np.zeros(0))
     unfolding: np.ndarray = field(default_factory=lambda: np.zeros(3))
     noise_floor: float = 0.0
+    constraints: tuple = ()
+    constraint_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def n_iter(self) -> int:
+        """Read-only alias of :attr:`n_newton` (the former name)."""
+        return self.n_newton
 
     def summary(self) -> dict:
-        """The :meth:`Equilibrium.summary` plus the Newton record (status, n_iter, history)."""
+        """The :meth:`Equilibrium.summary` plus the Newton record (status, counters, history)."""
         out = super().summary()
-        out.update(status=int(self.status), n_iter=int(self.n_iter),
+        out.update(status=int(self.status), n_newton=int(self.n_newton), n_lu=int(self.n_lu),
                    history=[float(h) for h in self.history],
                    unfolding=[float(a) for a in self.unfolding],
-                   noise_floor=float(self.noise_floor))
+                   noise_floor=float(self.noise_floor),
+                   constraints=[k.params() for k in self.constraints],
+                   constraint_multipliers=[float(m) for m in self.constraint_multipliers])
         return out
 
 
@@ -198,6 +228,10 @@ class EquilibriumSystem:
     reference : Curve
         Initial guess with constant ``g``: supplies the grid, ``theta0``, ``gamma(0)``,
         the phase reference and the unfolding fields ``phi_j``.
+    constraints : sequence of Constraint, optional
+        Bound length / area constraints (:func:`qsa.constraints.bind_constraints`): one
+        multiplier ``mu_i`` (appended to the unknowns) and one equation each
+        (:mod:`qsa.equilibria.constraint_terms`).
 
     Examples
     --------
@@ -211,8 +245,14 @@ class EquilibriumSystem:
     (36, True, True)
     """
 
-    def __init__(self, energy, reference: Curve):
+    def __init__(self, energy, reference: Curve, constraints=()):
         self.energy = energy
+        self.constraints = tuple(constraints)
+        for con in self.constraints:
+            if con.target is None:
+                raise ValueError("constraints must be bound to a curve first "
+                                 "(qsa.constraints.bind_constraints)")
+        self.m = len(self.constraints)
         self.ref = reference
         self.grid = reference.grid
         self.N = reference.N
@@ -234,12 +274,29 @@ class EquilibriumSystem:
             self.phase_value = float(self.phase @ c.kappa)
         self.n_unfold = self.phi.shape[0]
         self._Cmat = None if self.grid.sparse else self.grid.cumulative_matrix()
-        self.size = N + 1 + self.n_unfold
+        self.size = N + 1 + self.n_unfold + self.m
 
     # state <-> curve
-    def pack(self, curve: Curve) -> np.ndarray:
-        """Unknowns ``x = [kappa (N,), L, a (n_unfold,)]`` of a constant-g curve, ``a = 0``."""
-        return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold)])
+    def pack(self, curve: Curve, mu=None) -> np.ndarray:
+        """Unknowns ``x = [kappa (N,), L, a (n_unfold,), mu (m,)]`` of a constant-g curve.
+
+        ``a = 0``; ``mu`` (the constraints' multipliers) defaults to the projection of
+        ``V^n`` of :attr:`energy` (:func:`~qsa.equilibria.constraint_terms.initial_multipliers`).
+        """
+        if mu is None:
+            mu = (initial_multipliers(self.constraints, curve,
+                                      normal_velocity(self.energy, curve))
+                  if self.m else np.zeros(0))
+        return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold),
+                               np.asarray(mu, dtype=float).reshape(self.m)])
+
+    def unfolding(self, x) -> np.ndarray:
+        """The unfolding parameters ``a`` of unknowns ``x``, shape (n_unfold,)."""
+        return np.asarray(x[self.N + 1: self.N + 1 + self.n_unfold])
+
+    def constraint_multipliers(self, x) -> np.ndarray:
+        """The multipliers ``mu`` of the constraints in unknowns ``x``, shape (m,)."""
+        return np.asarray(x[self.size - self.m:])
 
     def curve(self, x) -> Curve:
         """The :class:`~qsa.curve.Curve` of unknowns ``x`` (``g = L``, reference base point)."""
@@ -247,7 +304,7 @@ class EquilibriumSystem:
         return Curve(x[:N], x[N], self.grid, self.ref.theta0, self.ref.origin)
 
     def residual(self, x, energy=None) -> np.ndarray:
-        """``F(x)``, shape (size,): ``[V^n + a.phi, C, phase]``.
+        """``F(x)``, shape (size,): ``[V^n + a.phi + mu.n, C, phase, c - c*]``.
 
         Parameters
         ----------
@@ -263,15 +320,21 @@ class EquilibriumSystem:
         energy = self.energy if energy is None else energy
         N = self.N
         c = self.curve(x)
-        a = x[N + 1:]
-        V = normal_velocity(energy, c) + a @ self.phi
+        V = normal_velocity(energy, c) + self.unfolding(x) @ self.phi
+        if self.m:
+            V = V + self.constraint_multipliers(x) @ constraint_normals(self.constraints, c)
         parts = [V, c.closure()]
         if self.phase is not None:
             parts.append([self.phase @ x[:N] - self.phase_value])
+        parts.append([con.defect(c) for con in self.constraints])
         return np.concatenate(parts)
 
+    def _constraint_rows(self):
+        """Index of the first constraint row of ``F``."""
+        return self.N + 3 + (self.phase is not None)
+
     def scaled_parts(self, F, c: Curve, scale: float) -> np.ndarray:
-        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|)``, shape (3,).
+        """``(max|F_V| / scale, |F_C| / L, |F_phase| / max|kappa|, max |c - c*| / |c*|)``, (4,).
 
         Parameters
         ----------
@@ -284,15 +347,21 @@ class EquilibriumSystem:
 
         Returns
         -------
-        ndarray, shape (3,)
+        ndarray, shape (4,)
         """
         N = self.N
-        out = np.zeros(3)
+        out = np.zeros(4)
         out[0] = np.max(np.abs(F[:N])) / scale
         out[1] = np.linalg.norm(F[N:N + 3]) / c.length()
         if self.phase is not None:
             out[2] = abs(F[N + 3]) / max(np.max(np.abs(c.kappa)), 1.0)
+        if self.m:
+            out[3] = np.max(np.abs(self._scaled_defects(F)))
         return out
+
+    def _scaled_defects(self, F):
+        r = self._constraint_rows()
+        return F[r:r + self.m] / np.array([abs(con.target) for con in self.constraints])
 
     def merit(self, F, c: Curve, scale: float) -> float:
         """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows).
@@ -310,6 +379,8 @@ class EquilibriumSystem:
         m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
         if self.phase is not None:
             m += (F[N + 3] / max(np.max(np.abs(c.kappa)), 1.0)) ** 2
+        if self.m:
+            m += np.sum(self._scaled_defects(F) ** 2)
         return float(np.sqrt(m))
 
     def scaled_norm(self, F, c: Curve, scale: float) -> float:
@@ -334,13 +405,14 @@ class EquilibriumSystem:
         A : matrix (N, N)
             ``dV^n/dkappa`` (sparse for finite differences, dense for Fourier).
         B : ndarray (N, m)
-            Columns ``dV^n/dL`` and ``phi_j``.
+            Columns ``dV^n/dL``, ``phi_j`` and ``n_i`` (the constraints' multipliers).
         Crows : ndarray (m', N)
-            Closure (and phase) rows, derivatives w.r.t. kappa.
+            Closure (phase, constraint) rows, derivatives w.r.t. kappa.
         D : ndarray (m', m)
-            Their derivatives w.r.t. ``(L, a)``.
+            Their derivatives w.r.t. ``(L, a, mu)``.
         low : list of (P, Q)
-            Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians).
+            Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians and
+            area penalties).
         """
         energy = self.energy if energy is None else energy
         N = self.N
@@ -348,24 +420,37 @@ class EquilibriumSystem:
         c = self.curve(x)
         L = x[N]
         k = c.kappa
-        grad = energy.gradient(c)
-        mu, xi = grad[:N], L * grad[N:]
-        H = energy.hessian(c)
-        Hkk, Hgk, Hcol, lowH = _blocks(H, N)
         lap = laplace_s(c)
         Gm = lap + grid.diag(k**2)  # = -G
         diag = grid.diag
-        A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
+        # area energies have the exact constant V^n = -F'(A): their own derivatives
+        rest, area_terms = split_area_energies(energy)
         low = []
-        if lowH is not None:
-            Pk, Pg, Q = lowH
-            low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
+        if rest is not None:
+            grad = rest.gradient(c)
+            mu, xi = grad[:N], L * grad[N:]
+            H = rest.hessian(c)
+            Hkk, Hgk, Hcol, lowH = _blocks(H, N)
+            A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
+            if lowH is not None:
+                Pk, Pg, Q = lowH
+                low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
+            dmu = Hcol[:N] - mu / L
+            dxi = L * Hcol[N:]
+            VL = Gm @ dmu - (2.0 / L) * (lap @ mu) - k * dxi
+        else:
+            A = diag(np.zeros(N))
+            VL = np.zeros(N)
+        low_area, VL_area = area_energy_jacobian(area_terms, c)
+        if low_area is not None:
+            low.append(low_area)
+        VL = VL + VL_area
+        cj = constraint_jacobian(self.constraints, c, self.constraint_multipliers(x))
+        if np.any(cj.diagonal != 0):
+            A = A + diag(cj.diagonal)
         if sp.issparse(A):
             A = A.tocsr()
-        dmu = Hcol[:N] - mu / L
-        dxi = L * Hcol[N:]
-        VL = Gm @ dmu - (2.0 / L) * (lap @ mu) - k * dxi
-        B = np.column_stack([VL, self.phi.T])
+        B = np.column_stack([VL, self.phi.T, cj.columns])
         # closure rows: exact derivatives of the quadrature of C
         w = grid.weights
         th = c.theta()
@@ -379,6 +464,8 @@ class EquilibriumSystem:
         if self.phase is not None:
             rows.append(self.phase)
             dL.append(0.0)
+        rows.extend(cj.rows)
+        dL.extend(cj.dL)
         Crows = np.array(rows)
         D = np.zeros((len(rows), m))
         D[:, 0] = dL
@@ -494,13 +581,59 @@ def _check_curve(energy, curve):
         raise ValueError(f"energy must be a qsa Energy, got {type(energy).__name__}")
 
 
-def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True):
-    """Damped Newton on ``system.residual``; returns ``(x, status, history, n_iter, floor)``.
+@dataclass(frozen=True, eq=False)
+class NewtonRun:
+    """The record of :func:`newton_solve`.
+
+    Attributes
+    ----------
+    x : ndarray, shape (system.size,)
+        The best state found (the last one unless a later step was worse).
+    status : int
+        A key of :data:`MESSAGES`.
+    history : ndarray, shape (n_newton + 1,)
+        Relative residual before each step and at the end.
+    n_newton, n_lu : int
+        Newton steps taken and factorizations of the Newton matrix.
+    noise_floor : float
+        Estimated round-off level of the relative residual.
+    """
+
+    x: np.ndarray
+    status: int
+    history: np.ndarray
+    n_newton: int
+    n_lu: int
+    noise_floor: float
+
+    @property
+    def success(self) -> bool:
+        """``status >= 0``."""
+        return self.status >= 0
+
+
+def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True) -> NewtonRun:
+    """Damped Newton on ``system.residual`` from ``x0``.
 
     The full step is taken whenever it decreases the merit :meth:`EquilibriumSystem.merit`
     (a smooth 2-norm, for which the Newton direction is a descent direction);
     otherwise the step is halved (at most 10 times). Never raises for non-convergence:
-    the best state is returned with a status code (see ``STATUS_MESSAGES``).
+    the best state is returned with a status code (a key of :data:`MESSAGES`).
+
+    Parameters
+    ----------
+    system : EquilibriumSystem
+    x0 : ndarray, shape (system.size,)
+    tol : float
+        Target of :meth:`EquilibriumSystem.scaled_norm`.
+    maxiter : int
+    energy : Energy, optional
+        Another energy on the same system (default the system's).
+    line_search : bool
+
+    Returns
+    -------
+    NewtonRun
     """
     x = np.array(x0, dtype=float)
     scale = residual_scale(system.energy if energy is None else energy, system.curve(x))
@@ -509,30 +642,31 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
     m = system.merit(F, system.curve(x), scale)
     history = [r]
     best = (r, x.copy())
-    status = 2
+    status = -1
     floor = None
-    n_iter = 0
+    n_newton = n_lu = 0
     for it in range(maxiter + 1):
         if not np.isfinite(r):
-            status = 3
+            status = -2
             break
         if r <= tol:
             status = 0
             break
         if it == maxiter:
-            status = 2
+            status = -1
             break
         try:
+            n_lu += 1
             fac = _Factor(system.jacobian(x, energy))
             if fac.singular:
-                status = 3
+                status = -2
                 break
             dx = -fac.solve(F)
         except (RuntimeError, np.linalg.LinAlgError, ValueError):
-            status = 3
+            status = -2
             break
         if not np.all(np.isfinite(dx)):
-            status = 3
+            status = -2
             break
         t = 1.0
         accepted = False
@@ -550,11 +684,11 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
                     accepted = True
                     break
             t *= 0.5
-        n_iter += 1
+        n_newton += 1
         if not accepted:
             # At the round-off floor no step can decrease the residual any more.
             floor = _noise_floor(system, x, scale, energy)
-            status = 1 if _at_floor(system, x, F, scale, tol, floor) else 4
+            status = 1 if _at_floor(system, x, F, scale, tol, floor) else -3
             break
         x, F, r, m = xt, Ft, rt, mt
         history.append(r)
@@ -570,23 +704,26 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
         x, r = best[1], best[0]
     if floor is None:
         floor = _noise_floor(system, x, scale, energy)
-    return x, status, np.array(history), n_iter, float(np.max(floor))
+    return NewtonRun(x, status, np.array(history), n_newton, n_lu, float(np.max(floor)))
 
 
-def _params(energy, curve, Lambda):
-    params = {"L": curve.length()}
+def _params(energy, curve, Lambda, constraints=(), mu=()):
+    params = {"L": curve.length(), "A": curve.area()}
     for t in energy.terms():
-        for name in ("alpha", "kstar", "eps", "beta", "L_star"):
+        for name in ("alpha", "kstar", "eps", "beta", "L_star", "p"):
             v = getattr(t, name, None)
             if isinstance(v, (int, float)) and name not in params:
                 params[name] = float(v)
     if "beta" in params and "L_star" in params:
         params["nu2"] = params["beta"] * (params["L"] - params["L_star"])
     params["nu1"] = float(-Lambda[2])
+    for con, m in zip(constraints, mu, strict=True):
+        params[f"mu_{con.symbol}"] = float(m)
     return params
 
 
-def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> PolishResult:
+def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
+           constraints=None) -> PolishResult:
     """Polish an approximate equilibrium by Newton's method on ``V^n = 0`` with closure.
 
     Parameters
@@ -604,22 +741,32 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
         Maximum number of Newton steps.
     line_search : bool
         Halve the step until the residual decreases (default True).
+    constraints : sequence of Constraint, optional
+        Exact constraints besides closure, e.g. ``[FixedLength(), FixedArea()]``
+        (:mod:`qsa.constraints`; a ``None`` target is the value of ``curve``). The
+        equations become ``V^n + sum_i mu_i n_i = 0`` with ``c_i = c_i*`` (``n_L = kappa``,
+        ``n_A = 1``), the multipliers ``mu_i`` unknowns of the Newton system
+        (:mod:`qsa.equilibria.constraint_terms`).
 
     Returns
     -------
     PolishResult
-        An :class:`Equilibrium` (``kind="polished"``) with ``residual = max|V^n|``,
+        An :class:`Equilibrium` (``kind="polished"``) with ``residual = max|V^n|``
+        (``max|V^n + sum_i mu_i n_i|`` with constraints),
         ``closure = |C(U)|``, ``multipliers`` (Lambda, by projection of
         ``nabla_I E`` on ``span Psi`` in ``<f, h> = int f h dsigma``), ``params``
         (``L``, the energy's parameters, ``nu1 = -Lambda_3``, ``nu2 = beta (L - L*)``
-        when a perimeter term is present), plus ``status``, ``n_iter``, ``history``
-        (relative residual per iteration), ``unfolding``, ``noise_floor``. A solve
+        when a perimeter term is present), plus ``status``, ``n_newton``, ``n_lu``, ``history``
+        (relative residual per iteration), ``unfolding``, ``noise_floor``, and the
+        bound ``constraints`` with their ``constraint_multipliers`` (also in ``params``
+        as ``mu_L``, ``mu_A``: ``mu_A`` is the pressure holding the shape). A solve
         that does not converge returns ``success=False`` with the best state found.
 
     Raises
     ------
     ValueError
-        ``energy``/``curve`` of the wrong type, ``tol <= 0`` or ``maxiter < 0``.
+        ``energy``/``curve`` of the wrong type, ``tol <= 0``, ``maxiter < 0`` or bad
+        ``constraints``.
 
     Notes
     -----
@@ -637,32 +784,70 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
     >>> res = polish(eq.energy, eq.curve)
     >>> bool(res.success), res.residual < 1e-8 * res.residual_scale
     (True, True)
+
+    An inextensible ring under pressure relaxes to the circle of its length, with
+    ``mu_L = -R (p + eps / (2 R^3))`` (here ``R = 1``):
+
+    >>> import numpy as np
+    >>> from qsa.constraints import FixedLength
+    >>> from qsa.energies import CanhamHelfrich, Pressure
+    >>> c = Curve.polar(lambda t: 1 + 0.01 * np.cos(2 * t), Fourier(33))
+    >>> res = polish(CanhamHelfrich(1.0) + Pressure(-1.0), c,
+    ...              constraints=[FixedLength(2 * np.pi)])
+    >>> bool(res.success), round(res.params["L"] / np.pi, 10), round(res.params["mu_L"], 8)
+    (True, 2.0, 0.5)
     """
     _check_curve(energy, curve)
     tol = real_number(tol, "tol", positive=True)
     maxiter = integer(maxiter, "maxiter", minimum=0)
+    cons = bind_constraints(constraints, curve)
     guess = _equal_arclength(curve)
-    system = EquilibriumSystem(energy, guess)
-    x, status, history, n_iter, floor = newton_solve(system, system.pack(guess), tol, maxiter,
-                                                     line_search=line_search)
-    return _result(energy, system, x, status, history, n_iter, floor, curve is not guess)
+    system = EquilibriumSystem(energy, guess, cons)
+    run = newton_solve(system, system.pack(guess), tol, maxiter, line_search=line_search)
+    return polish_result(energy, system, run, reparameterized=curve is not guess)
 
 
-def _result(energy, system, x, status, history, n_iter, floor, reparameterized=False):
+def polish_result(energy, system, run: NewtonRun, reparameterized=False) -> PolishResult:
+    """The :class:`PolishResult` of a Newton run on ``system`` (residuals, multipliers, message).
+
+    Parameters
+    ----------
+    energy : Energy
+        The energy the state is an equilibrium of.
+    system : EquilibriumSystem
+    run : NewtonRun
+    reparameterized : bool
+        Say in the message that the guess was reparameterized to constant ``g``.
+
+    Returns
+    -------
+    PolishResult
+    """
+    x, status = run.x, run.status
     c = system.curve(x)
+    cons = system.constraints
+    mu = np.array(system.constraint_multipliers(x), dtype=float)
     V = normal_velocity(energy, c)
+    if cons:
+        V = V + mu @ constraint_normals(cons, c)
     scale = residual_scale(energy, c)
     res = float(np.max(np.abs(V)))
     clo = float(np.linalg.norm(c.closure()))
-    Lambda = multipliers(energy, c)
-    success = status in (0, 1)
-    msg = (f"polish: {STATUS_MESSAGES[status]}; {n_iter} Newton steps, max|V^n| = {res:.2e} "
+    Lambda = multipliers(energy, c, constraints=cons)[:3]
+    name = "max|V^n + mu.n|" if cons else "max|V^n|"
+    msg = (f"{MESSAGES[status]}; {run.n_newton} Newton steps, {name} = {res:.2e} "
            f"({res / scale:.1e} of the largest term), |C(U)| = {clo:.2e}, "
-           f"round-off floor ~{floor:.1e}")
+           f"round-off floor ~{run.noise_floor:.1e}")
+    if cons:
+        msg += "; " + ", ".join(f"{k.symbol} = {k.value(c):.10g} (mu_{k.symbol} = {m:.6g})"
+                                for k, m in zip(cons, mu, strict=True))
     if reparameterized:
         msg += "; the guess was reparameterized to constant g"
-    return PolishResult(c, energy, _params(energy, c, Lambda), Lambda, res, clo, scale,
-                        "polished", success, msg, {}, status, n_iter, np.asarray(history),
-                        np.array(x[system.N + 1:], dtype=float).copy()
-                        if system.n_unfold == 3 else
-                        np.concatenate([x[system.N + 1:], [0.0]]), float(floor))
+    a = np.array(system.unfolding(x), dtype=float)
+    unfolding = a if a.size == 3 else np.concatenate([a, [0.0]])
+    return PolishResult(c, energy, _params(energy, c, Lambda, cons, mu), Lambda, res, clo, scale,
+                        kind="polished", success=status >= 0, message=msg, status=status,
+                        n_newton=run.n_newton, n_lu=run.n_lu,
+                        history=np.asarray(run.history, dtype=float), unfolding=unfolding,
+                        noise_floor=float(run.noise_floor), constraints=cons,
+                        constraint_multipliers=mu)

@@ -1,7 +1,7 @@
 """Periodic N-pulse faceted equilibria (and the circle) of ``Faceting + Perimeter``.
 
 Construction (section "Formal Equilibrium and Quasi-Steady Analysis", e:Facet-CP,
-e:Fint; MATH.md section 5). With constant arc length ``g = L`` the equilibrium
+e:Fint; Conventions and errata, section 5). With constant arc length ``g = L`` the equilibrium
 equations reduce to ``alpha^2 psi'' - W'(psi) = nu1`` in arc length ``sigma = L s``,
 with first integral ``alpha^2 psi'^2/2 = P(psi) = W(psi) + nu1 psi + nu2``. Pick the
 periodic orbit (:mod:`qsa.equilibria.orbit`) whose pulse turns the tangent by
@@ -10,7 +10,7 @@ periodic orbit (:mod:`qsa.equilibria.orbit`) whose pulse turns the tangent by
 rotated by ``2 pi / N`` from the previous. Its length is ``L = N T`` (T the period).
 
 On such a state ``d_kappa E = -nu1`` and ``g d_g E = -(nu1 psi + nu2) + beta (L - L*)``,
-so (MATH.md section 5)
+so (Conventions and errata, section 5) ::
 
     V^n = -G(-nu1) - psi (-(nu1 psi + nu2) + beta (L - L*)) = psi (nu2 - beta (L - L*)),
 
@@ -18,7 +18,7 @@ which vanishes for ``L* = L - nu2 / beta``. The multipliers of e:Abs-CP are
 ``Lambda = (0, 0, -nu1)``.
 
 NOTE: the paper prints ``g d_g E = nu1 psi + nu2 + beta(|Gamma| - L*)`` and hence
-``V^n = -nu2 - beta(|Gamma| - L*)``; the sign of the ``nu`` terms is wrong (MATH.md
+``V^n = -nu2 - beta(|Gamma| - L*)``; the sign of the ``nu`` terms is wrong (Conventions and errata,
 section 5, "Sign slip"): V^n = 0 needs ``beta (L - L*) = nu2 < 0``, i.e. ``L < L*``.
 
 Existence. Along the family of periodic orbits (``nu2`` from the centre value to
@@ -30,7 +30,7 @@ well of P whose level is reached first. For ``nu1 = 0`` and a symmetric well
 (``W(k) = W(kstar - k)``) the orbit is symmetric about ``c = kstar/2``, so
 ``Theta = kstar T / 2`` increases from ``Theta_0 = pi alpha kstar / sqrt(-W''(kstar/2))``
 to infinity and an N-pulse exists iff ``N Theta_0 < 2 pi``, i.e.
-``N alpha kstar < 2 sqrt(-W''(kstar/2))``. For the quartic ``W''(kstar/2) = -kstar^2/4``:
+``N alpha kstar < 2 sqrt(-W''(kstar/2))``. For the quartic ``W''(kstar/2) = -kstar^2/4``: ::
 
     N alpha < 1.
 
@@ -205,7 +205,7 @@ def npulse(n_pulses, alpha, well=None, grid=None, nu1=0.0, beta=5.0, kstar=None)
     Notes
     -----
     See the module docstring for the derivation (e:Facet-CP, e:Fint, e:Facet-NV)
-    and the MATH.md section 5 sign correction of ``V^n``.
+    and the Conventions and errata, section 5 sign correction of ``V^n``.
 
     Examples
     --------
@@ -246,7 +246,7 @@ def npulse(n_pulses, alpha, well=None, grid=None, nu1=0.0, beta=5.0, kstar=None)
 def circle(R, alpha, grid=None, beta=5.0, well=None, kstar=None):
     """The circle of radius R as an equilibrium of ``Faceting + Perimeter``.
 
-    It is one when ``beta (2 pi R - L*) = k0 W'(k0) - W(k0)``, ``k0 = 1/R`` (MATH.md
+    It is one when ``beta (2 pi R - L*) = k0 W'(k0) - W(k0)``, ``k0 = 1/R`` (Conventions and errata,
     section 4), so ``L* = 2 pi R - (k0 W'(k0) - W(k0)) / beta``; the multipliers are
     ``Lambda = (0, 0, W'(k0))``.
 

@@ -1,6 +1,6 @@
 """Periodic orbits of the faceting equilibrium equation (phase-plane construction).
 
-Equilibria with constant arc length solve (e:Facet-CP, ``' = d/dsigma``)
+Equilibria with constant arc length solve (e:Facet-CP, ``' = d/dsigma``) ::
 
     alpha^2 psi'' - W'(psi) = nu1,
 
@@ -11,13 +11,13 @@ roots ``a < c < b`` of ``P``; they exist for ``nu2_c < nu2 < nu2_sep`` with
 ``nu2_c = -(W(c) + nu1 c)`` (the centre, small oscillations) and
 ``nu2_sep = -max(W(s) + nu1 s)`` over the two neighbouring minima ``s`` of ``P``
 (the separatrix, infinitely long plateaus). For ``nu1 = 0`` and the quartic well,
-``-kstar^4/64 < nu2 < 0`` (MATH.md section 5); ``nu2 -> 0`` is the separatrix.
+``-kstar^4/64 < nu2 < 0`` (Conventions and errata, section 5); ``nu2 -> 0`` is the separatrix.
 
 Period and curvature per pulse
 ------------------------------
 With ``psi = m + h tanh v`` (``m = (a+b)/2``, ``h = (b-a)/2``; i.e. ``psi = m + h sin u``
-with ``u = gd(v)``, MATH.md section 5) the turning-point singularities disappear:
-``P = (psi - a)(b - psi) R(psi)`` with ``R > 0`` on ``[a, b]`` and
+with ``u = gd(v)``, Conventions and errata, section 5) the turning-point singularities disappear:
+``P = (psi - a)(b - psi) R(psi)`` with ``R > 0`` on ``[a, b]`` and ::
 
     dsigma/dv = alpha sech(v) / sqrt(2 R),
 

@@ -26,7 +26,7 @@ class Equilibrium:
         they apply, plus ``"alpha"``, ``"beta"``, ``"kstar"``, ``"n_pulses"``, ...
     multipliers : ndarray, shape (3,)
         Lagrange multipliers ``Lambda`` with ``grad_I E = Lambda . Psi``
-        (e:Abs-CP); ``(0, 0, -nu1)`` for faceting N-pulses (MATH.md section 5).
+        (e:Abs-CP); ``(0, 0, -nu1)`` for faceting N-pulses (Conventions and errata, section 5).
     residual : float
         ``max |V^n|`` on the grid, V^n the energy's normal velocity.
     closure : float

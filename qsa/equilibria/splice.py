@@ -3,7 +3,7 @@
 Section "Formal Equilibrium and Quasi-Steady Analysis" (e:psi_h and the 2N-front
 quasi-equilibrium ``psi_N``). With constant arc length ``g = L`` and arc length
 ``sigma = L s``, corner ``i`` is the arc ``[p_{2i-1}, p_{2i}]`` between an up-front and a
-down-front; the curvature is
+down-front; the curvature is ::
 
     psi_N(sigma) = sum_i [ psi~(y_i + a_i) - psi~(y_i - a_i) ],
 
@@ -16,7 +16,7 @@ corner turns by exactly ``kstar (p_{2i} - p_{2i-1})``.
 
 NOTE: the paper cuts off at ``|s| in [alpha l, 2 alpha l]``, which shrinks with alpha
 and leaves an alpha-independent error; with a fixed cutoff the residuals scale like
-``exp(-kstar d_min / (sqrt(2) alpha))``, d_min the smallest front spacing (MATH.md
+``exp(-kstar d_min / (sqrt(2) alpha))``, d_min the smallest front spacing (Conventions and errata,
 section 5), as long as ``l1 > d_min``.
 
 Constraints and free parameters: the total turning ``kstar sum (p_{2i} - p_{2i-1}) =
@@ -24,7 +24,7 @@ Constraints and free parameters: the total turning ``kstar sum (p_{2i} - p_{2i-1
 positions; a common shift of all positions only moves the base point, so
 ``2N - 4`` parameters are free. :func:`splice` moves the positions by minimum-norm
 Gauss-Newton steps until ``|C| <= tol`` and returns a basis of the free directions.
-Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term):
+Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term): ::
 
     R_kappa = -alpha^2 psi_N'' + W'(psi_N),   R_g = -alpha^2/2 psi_N'^2 + W(psi_N).
 """

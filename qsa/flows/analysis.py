@@ -9,12 +9,12 @@ These measure the quantities the paper reports for its simulations
   counted);
 * ``functional_residual``: the paper's ``R_kappa`` -- the spread of the
   chemical potential ``mu = d_kappa E = -alpha^2 Delta_s kappa + W'(kappa)``
-  (constant at an equilibrium, MATH.md section 5);
+  (constant at an equilibrium, Conventions and errata, section 5);
 * ``rotation_defect`` and ``curvature_shift_defect``: how far a curve is from
   ``k``-fold rotational symmetry;
 * ``paired_sheets``: near-contact pairs of anti-parallel strands of a curve and
-  their separation (the optimal separation is ``l* sqrt(a^2 + 1/2)``, MATH.md
-  section 6);
+  their separation (the optimal separation is ``l* sqrt(a^2 + 1/2)``,
+  Conventions and errata, section 6);
 * ``closest_approach`` and :class:`SelfIntersectionMonitor`: distance between
   non-neighbouring parts of a curve and polygon crossings along a flow.
 
@@ -131,7 +131,7 @@ def functional_residual(mu, weights=None):
 
     ``R = max_j |mu_j - <mu>|`` with ``<mu>`` the ``dsigma``-weighted mean. It
     vanishes at an equilibrium of the faceting flow (``mu = -nu1`` constant,
-    MATH.md section 5) and is exponentially small between coarsening events.
+    Conventions and errata, section 5) and is exponentially small between coarsening events.
 
     Parameters
     ----------

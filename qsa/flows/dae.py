@@ -24,7 +24,7 @@ rotated by ``-pi/2``, i.e. along the OUTWARD normal):
 * model rows (auxiliary fields and the normal-velocity law)
 * tangential gauge   ``h sum_j Xdot_j . t_j = 0``                      (1 row)
 
-Signs follow MATH.md section 3: ``V`` is the OUTWARD normal velocity and a
+Signs follow Conventions and errata, section 3: ``V`` is the OUTWARD normal velocity and a
 counter-clockwise circle of radius R has ``kappa = +1/R``.
 
 Beyond the :class:`~qsa.flows.base.DAESystem` contract the systems offer
@@ -47,9 +47,9 @@ Notes
 -----
 NOTE: the appendix writes the normal motion with the tangent rotated by
 ``+pi/2`` (the inward normal) and ``kappa = -(1/L^3) gamma_ss . gamma_s^perp``;
-with outward ``V`` and ``kappa(circle) = +1/R`` both change sign (MATH.md
+with outward ``V`` and ``kappa(circle) = +1/R`` both change sign (Conventions and errata,
 section 3). NOTE: the appendix's velocity ``eps (kss - kappa^3)`` is wrong; the
-gradient flow of e:CHA-Energy has ``eps (kss + kappa^3 / 2)`` (MATH.md
+gradient flow of e:CHA-Energy has ``eps (kss + kappa^3 / 2)`` (Conventions and errata,
 section 3), verified here by the discrete energy-dissipation test.
 """
 

@@ -33,6 +33,8 @@ __all__ = ["solve_flow", "FlowResult", "prepare_initial"]
 
 _KIND = "qsa.flow-checkpoint"
 
+#: Meaning of :attr:`FlowResult.status` (0 success, positive: success with a caveat,
+#: negative: failure); :attr:`FlowResult.message` starts with the entry.
 MESSAGES = {
     0: "The flow reached t_final.",
     1: "Stopped by the callback.",
@@ -57,16 +59,19 @@ class FlowResult:
     t_steps, energy_steps, length_steps : ndarray, shape (n_steps + 1,)
         Time, energy and length after every accepted step (and at t = 0).
     success : bool
+        ``status >= 0``.
     status : int
-        0 reached ``t_final``; 1 stopped by the callback; -1 Newton failure
-        below ``min_step``; -2 ``max_steps`` reached.
+        A key of :data:`MESSAGES`: 0 reached ``t_final``; 1 stopped by the callback;
+        -1 Newton failure below ``min_step``; -2 ``max_steps`` reached.
     message : str
+        Starts with ``MESSAGES[status]``.
     n_steps, n_rejected : int
         Accepted and rejected steps (for ``method="be"`` a step is one
         step-doubling pass: two backward Euler steps of ``k`` advancing time by
         ``2k``).
-    n_newton, n_factorizations : int
-        Newton iterations and matrix factorizations.
+    n_newton, n_lu : int
+        Newton iterations and matrix factorizations (``n_factorizations`` is a
+        read-only alias of ``n_lu``).
     n_newton_failures : int
         Steps retried with a halved step after a Newton failure.
     checkpoint : str or None
@@ -92,7 +97,7 @@ class FlowResult:
     n_steps: int
     n_rejected: int
     n_newton: int
-    n_factorizations: int
+    n_lu: int
     n_newton_failures: int
     checkpoint: str | None
     x: np.ndarray
@@ -100,6 +105,11 @@ class FlowResult:
     method: str
     tol: float
     system: object = field(repr=False, compare=False)
+
+    @property
+    def n_factorizations(self) -> int:
+        """Read-only alias of :attr:`n_lu` (the former name)."""
+        return self.n_lu
 
     @property
     def N(self) -> int:
@@ -338,7 +348,7 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
         energy_steps=np.array(rec.step_E), length_steps=np.array(rec.step_L),
         success=status >= 0, status=status, message=message, n_steps=integ.n_steps,
         n_rejected=integ.n_rejected, n_newton=newton.n_iterations,
-        n_factorizations=newton.n_factorizations, n_newton_failures=integ.n_newton_failures,
+        n_lu=newton.n_factorizations, n_newton_failures=integ.n_newton_failures,
         checkpoint=checkpoint, x=X, y=Y, method=method, tol=tol, system=system)
 
 

@@ -1,6 +1,6 @@
 """Implicit time steppers for the DAE curve flows (appendix "Discussion of Numerical Scheme").
 
-Every implicit stage of the methods here is the nonlinear system
+Every implicit stage of the methods here is the nonlinear system ::
 
     G(y) = F(y, (y - psi) c) = 0,    dG/dy = dF/dy + c dF/dydot,
 
@@ -32,7 +32,7 @@ most ``tol``, advancing physical time by ``2k``; the next ``k`` is
 halves the step (as the paper's code does).
 
 NOTE: the paper's code advances its clock by ``k`` per accepted pass while the
-state advances by ``2k`` (MATH.md section 7); here the clock is physical time.
+state advances by ``2k`` (Conventions and errata, section 7); here the clock is physical time.
 """
 
 from __future__ import annotations

@@ -72,15 +72,20 @@ class VariableLengthComparison:
     separated_until: float
     time_ode: float
     speedup: float
-    nfev_ode: int
+    n_rhs_ode: int
     L_change: float
+
+    @property
+    def nfev_ode(self) -> int:
+        """Read-only alias of ``n_rhs_ode`` (the former name)."""
+        return self.n_rhs_ode
 
     def summary(self):
         return {"beta": self.beta, "collision_ode": self.collision_ode,
                 "collision_rel_diff": self.collision_rel_diff, "error_at": self.error_at,
                 "max_error": self.max_error, "max_error_separated": self.max_error_separated,
                 "separated_until": self.separated_until, "time_ode": self.time_ode,
-                "speedup": self.speedup, "nfev_ode": self.nfev_ode, "L_change": self.L_change}
+                "speedup": self.speedup, "n_rhs_ode": self.n_rhs_ode, "L_change": self.L_change}
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,7 +142,9 @@ class FrontComparison(_Summarised):
         ``d_c`` of the front.
     time_dae, time_ode : float
         CPU seconds.
-    n_steps_dae, nfev_ode : int
+    n_steps_dae, n_rhs_ode : int
+        Accepted DAE steps; evaluations of the ODE's right-hand side (``nfev_ode`` is a
+        read-only alias).
     dae_message, ode_message : str
     variable_length : VariableLengthComparison
     dae_spread : DAESpread or None
@@ -166,11 +173,16 @@ class FrontComparison(_Summarised):
     time_dae: float
     time_ode: float
     n_steps_dae: int
-    nfev_ode: int
+    n_rhs_ode: int
     dae_message: str
     ode_message: str
     variable_length: VariableLengthComparison
     dae_spread: DAESpread | None = None
+
+    @property
+    def nfev_ode(self) -> int:
+        """Read-only alias of :attr:`n_rhs_ode` (the former name)."""
+        return self.n_rhs_ode
 
     @property
     def collision_rel_diff(self):
@@ -196,7 +208,7 @@ class FrontComparison(_Summarised):
             "separated_until": self.separated_until,
             "collision_distance": self.collision_distance,
             "time_dae": self.time_dae, "time_ode": self.time_ode, "speedup": self.speedup,
-            "n_steps_dae": self.n_steps_dae, "nfev_ode": self.nfev_ode,
+            "n_steps_dae": self.n_steps_dae, "n_rhs_ode": self.n_rhs_ode,
             "dae_message": self.dae_message, "ode_message": self.ode_message,
             "variable_length": self.variable_length.summary(),
         }
@@ -308,7 +320,7 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
         max_error_separated=_max_or_nan(error, sep),
         separated_until=float(t[sep][-1] / tc_dae) if np.any(sep) else np.nan,
         collision_distance=float(dc), time_dae=ref.cpu, time_ode=time_ode,
-        n_steps_dae=int(ref.result.n_steps), nfev_ode=int(sol.nfev),
+        n_steps_dae=int(ref.result.n_steps), n_rhs_ode=int(sol.n_rhs),
         dae_message=ref.result.message, ode_message=sol.message, variable_length=variable,
         dae_spread=spread)
 
@@ -394,5 +406,5 @@ def _variable_length(sc, ref, t_final, fractions, wide, rtol=1e-4, correction=No
         error_at=_error_at(t, error, before, tc_dae, fractions),
         max_error=_max_or_nan(error, before), max_error_separated=_max_or_nan(error, sep),
         separated_until=float(t[sep][-1] / tc_dae) if np.any(sep) else np.nan,
-        time_ode=cpu, speedup=ref.cpu / cpu, nfev_ode=int(sol.nfev),
+        time_ode=cpu, speedup=ref.cpu / cpu, n_rhs_ode=int(sol.n_rhs),
         L_change=float(sol.segments[0].L[-1] - L))

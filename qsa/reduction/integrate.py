@@ -15,7 +15,7 @@ rate ``~ 2 pi beta / R``, is the slowest of them) and the deviation of the true 
 manifold from the splices. A relative error ``eps`` of the interaction rate is
 exponentially amplified near a collision: a pair closing as ``d' = -c exp(-lambda d)``,
 i.e. ``exp(lambda d(t)) = exp(lambda d_0) - lambda c t`` and
-``t_c = (exp(lambda d_0) - 1) / (lambda c)``, with rate ``c (1 + eps)`` is off by
+``t_c = (exp(lambda d_0) - 1) / (lambda c)``, with rate ``c (1 + eps)`` is off by ::
 
     (eps / lambda) (t / t_c) / (1 - t / t_c)
 
@@ -39,7 +39,16 @@ from scipy.optimize import brentq
 from qsa.equilibria.splice import close_positions, default_cutoff
 
 __all__ = ["FrontODEResult", "ODECollision", "ODESegment", "collision_distance",
-           "collision_sensitivity", "integrate_fronts", "remove_pair", "STIFF_AUTO"]
+           "collision_sensitivity", "integrate_fronts", "remove_pair", "STIFF_AUTO",
+           "MESSAGES"]
+
+#: Meaning of :attr:`FrontODEResult.status` (0 success, positive: success with a caveat,
+#: negative: failure); :attr:`FrontODEResult.message` starts with the entry.
+MESSAGES = {
+    0: "reached t_final",
+    1: "stopped after collision: fewer than 4 fronts left, or max_collisions reached",
+    -1: "solve_ivp failed",
+}
 
 
 #: ``method="auto"`` of :func:`integrate_fronts` switches to Radau above this
@@ -135,14 +144,19 @@ class FrontODEResult:
         Pieces between collisions.
     events : list of ODECollision
     success : bool
+        ``status >= 0``.
     status : int
-        0 reached ``t_final``; 1 stopped after a collision left < 4 fronts (or after
-        ``max_collisions``); -1 failed.
+        A key of :data:`MESSAGES`: 0 reached ``t_final``; 1 stopped after a collision
+        left < 4 fronts (or after ``max_collisions``); -1 failed.
     message : str
-    nfev : int
-        Evaluations of ``F`` (also those for the Jacobian of an implicit method).
+        Starts with ``MESSAGES[status]``.
+    n_rhs : int
+        Evaluations of ``F`` (also those for the Jacobian of an implicit method;
+        ``nfev`` is a read-only alias).
     elapsed : float
         Wall time in seconds.
+    n_lu : int
+        LU factorizations of an implicit method (0 for the explicit ones).
     """
 
     segments: list
@@ -150,8 +164,14 @@ class FrontODEResult:
     success: bool
     status: int
     message: str
-    nfev: int
+    n_rhs: int
     elapsed: float
+    n_lu: int = 0
+
+    @property
+    def nfev(self) -> int:
+        """Read-only alias of :attr:`n_rhs` (the former name)."""
+        return self.n_rhs
 
     @property
     def t(self):
@@ -292,12 +312,12 @@ def integrate_fronts(ode, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method
     var = ode.beta is not None
     L = float(ode.length)
     ids = np.arange(p.size)  # track index of each current front
-    t0, segments, events, nfev = 0.0, [], [], 0
+    t0, segments, events, n_rhs, n_lu = 0.0, [], [], 0, 0
     if t_eval is not None:
         t_eval = np.asarray(t_eval, dtype=float)
     atol = 1e-9 * ode.front.width if atol is None else atol
     dc = ode.collision_distance
-    status, message = 0, "reached t_final"
+    status, message = 0, MESSAGES[0]
     while True:
         cut = ode.cutoff or default_cutoff(p, L)
         if close and not _is_closed(ode, p, cut, L if var else None):
@@ -351,13 +371,14 @@ def integrate_fronts(ode, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method
         implicit = var and meth in ("Radau", "BDF", "LSODA")
         sol = solve_ivp(rhs, (t0, t_final), y0, method=meth, t_eval=te, rtol=rtol,
                         atol=atol, events=gap_event, **({"jac": jac} if implicit else {}))
-        nfev += count[0]
+        n_rhs += count[0]
+        n_lu += int(sol.nlu)
         Y = np.asarray(sol.y, dtype=float).reshape(y0.size, -1).T
         Ls = Y[:, -1] if var else np.full(Y.shape[0], L)
         segments.append(ODESegment(np.asarray(sol.t, dtype=float), Y[:, : p.size],
                                    ids.copy(), cut, Ls))
         if sol.status == -1:
-            status, message = -1, f"solve_ivp failed: {sol.message}"
+            status, message = -1, f"{MESSAGES[-1]}: {sol.message}"
             break
         if sol.status == 0:
             break
@@ -372,9 +393,9 @@ def integrate_fronts(ode, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method
                                    pc.copy(), ids.copy()))
         q, qids = remove_pair(pc, ids, i, L, redistribute)
         if q.size < 4 or len(events) > max_collisions:
-            status, message = 1, (f"stopped after collision at t={tc:.6g}: "
-                                  f"{q.size} fronts left")
+            status, message = 1, (f"{MESSAGES[1]} (collision at t={tc:.6g}, "
+                                  f"{q.size} fronts left)")
             break
         p, ids, t0 = q, qids, tc
-    return FrontODEResult(segments, events, status == 0 or status == 1, status, message,
-                          nfev, time.perf_counter() - start)
+    return FrontODEResult(segments, events, status >= 0, status, message, n_rhs,
+                          time.perf_counter() - start, n_lu)

@@ -1,7 +1,7 @@
 """Spectra of the linearized flow: Hessians, linearizations, eigen-solvers, kernel checks.
 
 ``hessian(energy, curve)`` (e:cF-Hessian) and ``lagrange_hessian(energy, curve)``
-(``L_Lambda = nabla^2 E - Lambda . nabla^2 C``, MATH.md section 4);
+(``L_Lambda = nabla^2 E - Lambda . nabla^2 C``, Conventions and errata, section 4);
 ``linearization(energy, curve, gauge)`` with gauges ``"comoving"``
 (``-M M-dagger L_Lambda``), ``"paper"`` (e:FOE-Lin as printed), ``"normal"``
 (``J``, dsigma-self-adjoint) and ``"scaled"``; ``spectrum(...)`` -> :class:`Spectrum`

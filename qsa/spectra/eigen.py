@@ -464,8 +464,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
                         "reparameterization modes: prefer gauge='normal')"
                         if gauge in ("comoving", "paper") else ""))
     method = "dense" if k is None else f"shift-invert (k={k}, sigma={sigma})"
-    msg = (f"{gauge} gauge, {method} [{reported.method}]: {vals.size} eigenvalues, "
-           f"{n_unstable} unstable, "
+    msg = (f"{MESSAGES[status]}; {gauge} gauge, {method} [{reported.method}]: "
+           f"{vals.size} eigenvalues, {n_unstable} unstable, "
            f"{n_kernel} in the kernel (|lambda| <= {tol:.2e})")
     if check_reject:
         msg += f"; {spurious.size} rejected as spurious (N = {curve.N} vs {N2})"
@@ -485,8 +485,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         max_imag=float(reported.max_imag),
         asymmetry=_asymmetry(op.H) if gauge == "normal" else np.nan,
         multipliers=LH.multipliers, projection_residual=LH.projection_residual,
-        relative_residual=LH.relative_residual, rtol=rtol, success=True, status=status,
-        message=msg)
+        relative_residual=LH.relative_residual, rtol=rtol, success=status >= 0,
+        status=status, message=msg)
 
 
 def _roundoff(op, iters=30):

@@ -7,7 +7,7 @@ matrix carries an absolute round-off error of order ``eps |J|`` -- at ``N = 10^4
 finite differences that is larger than the slow eigenvalues themselves. The factors
 are of order 2 each. With ``W = diag(dsigma)``, ``W2 = diag(dsigma, dsigma)``,
 ``H = W2 L_Lambda`` (symmetric) and the normal columns of ``M``,
-``M1 = [G; diag(g kappa)]`` (``G = -Delta_s - kappa^2``),
+``M1 = [G; diag(g kappa)]`` (``G = -Delta_s - kappa^2``), ::
 
     W J = -M1^T H M1,
 
@@ -16,7 +16,7 @@ is a symmetric-definite pencil. Its eigenvalues nearest a shift ``sigma`` are th
 largest of ``(W J - sigma W)^{-1} W``, and that inverse is applied without forming
 ``J``: with ``psi = G phi`` and ``chi = H_kk psi + H_kg (g kappa phi)`` the system
 ``(W J - sigma W) phi = b`` is the sparse (finite differences) or dense (Fourier)
-``3N x 3N`` system
+``3N x 3N`` system ::
 
     [ -sigma W - gk H_gg gk    -gk H_gk    -G^T ] [phi]   [b]
     [ -H_kg gk                 -H_kk        I   ] [psi] = [0]        (gk = diag(g kappa))
@@ -57,19 +57,22 @@ import scipy.sparse.linalg as spla
 
 from qsa import geometry
 from qsa.curve import Curve
-from qsa.linalg import SparsePlusLowRank, factorize
+from qsa.linalg import ReducedHessian, SparsePlusLowRank, factorize
 
 __all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
 
 _EPS = np.finfo(float).eps
 
 
-def _split_low_rank(L):
-    """``(S, U, V)`` with ``L = S + U V^T`` (``U, V`` empty when ``L`` has no low-rank part)."""
-    if isinstance(L, SparsePlusLowRank):
-        return L.S, L.U, L.V
+def _split(L):
+    """``(S, U, V, K)`` with ``L = S + U V^T + K``, ``K`` the implicit-state part or None."""
     n = L.shape[0]
-    return L, np.zeros((n, 0)), np.zeros((n, 0))
+    if isinstance(L, ReducedHessian):
+        K = L._with(S=sp.csr_matrix(L.shape), U=np.zeros((n, 0)), V=np.zeros((n, 0)))
+        return L.S, L.U, L.V, K
+    if isinstance(L, SparsePlusLowRank):
+        return L.S, L.U, L.V, None
+    return L, np.zeros((n, 0)), np.zeros((n, 0)), None
 
 
 def _square(A):
@@ -96,6 +99,11 @@ class FactoredNormalOperator:
         The low-rank part of ``W2 L_Lambda`` is ``U V^T`` (``U`` already scaled by ``W2``).
     w : ndarray, shape (N,)
         ``dsigma``.
+    reduced : ReducedHessian or None
+        The part of ``W2 L_Lambda`` that is the Hessian through an implicit state (the
+        two-point energies on finite-difference grids, :class:`~qsa.linalg.ReducedHessian`):
+        ``Lf K Rf`` with sparse factors; its implicit state becomes extra sparse unknowns
+        of the shift-invert system.
 
     Parameters
     ----------
@@ -122,6 +130,7 @@ class FactoredNormalOperator:
     U: np.ndarray
     V: np.ndarray
     w: np.ndarray
+    reduced: object = None
 
     @classmethod
     def from_lagrangian(cls, curve: Curve, L) -> FactoredNormalOperator:
@@ -131,7 +140,8 @@ class FactoredNormalOperator:
         ----------
         curve : Curve
         L : matrix, shape (2N, 2N)
-            ``L_Lambda``: dense, sparse or :class:`~qsa.linalg.SparsePlusLowRank`.
+            ``L_Lambda``: dense, sparse, :class:`~qsa.linalg.SparsePlusLowRank` or
+            :class:`~qsa.linalg.ReducedHessian`.
 
         Returns
         -------
@@ -139,13 +149,18 @@ class FactoredNormalOperator:
         """
         w = curve.dsigma
         w2 = np.concatenate([w, w])
-        S, U, V = _split_low_rank(L)
+        S, U, V, K = _split(L)
         if curve.grid.sparse:
             H = (sp.diags(w2) @ sp.csr_matrix(S)).tocsr()
         else:
             H = w2[:, None] * np.asarray(S.toarray() if sp.issparse(S) else S)
+            if K is not None:  # dense grids: no implicit state needed
+                H = H + w2[:, None] * K.toarray()
+                K = None
+        if K is not None:
+            K = sp.diags(w2) @ K
         return cls(curve, geometry.helmholtz(curve), curve.g * curve.kappa, H,
-                   w2[:, None] * U, V, w)
+                   w2[:, None] * U, V, w, K)
 
     @property
     def N(self) -> int:
@@ -167,6 +182,8 @@ class FactoredNormalOperator:
     def weighted_hessian(self, psi):
         """``H psi + U (V^T psi)`` (the full ``W2 L_Lambda`` applied)."""
         out = self.H @ psi
+        if self.reduced is not None:
+            out = out + self.reduced @ psi
         if self.rank:
             out = out + self.U @ (self.V.T @ psi)
         return out
@@ -204,22 +221,23 @@ class FactoredNormalOperator:
         return -(PY.T @ self.weighted_hessian(PX))
 
     def form(self):
-        """The matrix ``J`` (dense for Fourier, sparse or :class:`SparsePlusLowRank` for FD).
+        """The matrix ``J`` (dense for Fourier; sparse, :class:`SparsePlusLowRank` or
+        :class:`ReducedHessian` for finite differences).
 
         Its eigenvalues carry an absolute round-off error of order ``eps |J|``.
         """
-        N = self.N
         if self.curve.grid.sparse:
             M1 = sp.vstack([sp.csr_matrix(self.G), sp.diags(self.gk)]).tocsr()
-            core = -(M1.T @ (self.H @ M1))
-            core = (sp.diags(1.0 / self.w) @ core).tocsr()
+            Winv = sp.diags(1.0 / self.w)
+            core = (Winv @ -(M1.T @ (self.H @ M1))).tocsr()
+            if self.reduced is not None:
+                core = (Winv @ (M1.T @ (self.reduced @ M1))) * -1.0 + core
             if self.rank:
-                return SparsePlusLowRank(core, -(M1.T @ self.U) / self.w[:, None],
-                                         M1.T @ self.V)
+                core = core + SparsePlusLowRank(sp.csr_matrix(core.shape),
+                                                -(M1.T @ self.U) / self.w[:, None], M1.T @ self.V)
             return core
         M1 = np.vstack([np.asarray(self.G), np.diag(self.gk)])
         out = -(M1.T @ (self.H @ M1 + self.U @ (self.V.T @ M1)))
-        del N
         return out / self.w[:, None]
 
     # ---------------------------------------------------------------- solves
@@ -271,8 +289,29 @@ class FactoredNormalOperator:
         M1phi2 = np.concatenate([G2 @ phi**2, (self.gk[:, None] * phi) ** 2], axis=0)
         a = np.sum(psi**2 * (H2 @ psi**2), axis=0)
         b = 4.0 * np.sum(chi**2 * M1phi2, axis=0)
+        if self.reduced is not None:
+            a = a + _reduced_rounding(self.reduced, psi)
         del N
         return 3.0 * _EPS / np.sqrt(3.0) * np.sqrt(a + b)
+
+
+def _reduced_rounding(K, psi):
+    """``sum (entry x products)^2`` of the reduced quadratic form ``psi^T Lf K Rf psi``.
+
+    With ``u = Rf psi``, ``z = Z u`` and ``l = Lf^T psi`` (columns separately), the form
+    is ``l^T (Luu u + Lyu^T z) + (Z^T l)^T (Lyu u + Lyy z)``; each sparse factor's entries
+    are rounded independently (relative eps).
+    """
+    u = K.right @ psi
+    l = K.left.T @ psi
+    z = -K._solve_cY(K.cU @ u)
+    zl = -K._solve_cY(K.cU @ l)
+    sq = lambda A: A.multiply(A).tocsr()
+    out = (np.sum(l**2 * (sq(K.Luu) @ u**2), axis=0)
+           + np.sum(l**2 * (sq(K.Lyu.T) @ z**2), axis=0)
+           + np.sum(zl**2 * (sq(K.Lyu) @ u**2), axis=0)
+           + np.sum(zl**2 * (sq(K.Lyy) @ z**2), axis=0))
+    return out
 
 
 @dataclass(frozen=True)
@@ -296,6 +335,29 @@ class EigenErrors:
     residual: np.ndarray
     rounding: np.ndarray
     total: np.ndarray
+
+
+def _with_implicit_state(blocks, K, dgk, N):
+    """Append the implicit state of ``Lf K Rf`` to the 3N block system.
+
+    Unknowns ``u = Rf psi_full`` (``psi_full = (psi, g kappa phi)``), ``v = K u`` and the
+    state and adjoint ``(y, mu)``: rows ``u - Rf psi_full = 0``,
+    ``Luu u + Lyu^T y + cU^T mu - v = 0``, ``Lyu u + Lyy y + cY^T mu = 0``,
+    ``cU u + cY y = 0``; ``Lf v`` joins ``H psi_full`` in the first two block rows.
+    """
+    p, q = K.Luu.shape[0], K.cY.shape[0]
+    Lk, Lg = K.left[:N], K.left[N:]
+    Rk, Rg = K.right[:, :N], K.right[:, N:]
+    Ip = sp.identity(p, format="csr")
+    out = [row + [None, None, None, None] for row in blocks]
+    out[0][4] = -(dgk @ Lg)
+    out[1][4] = -Lk
+    out.append([-(Rg @ dgk), -Rk, None, Ip, None, None, None])
+    out.append([None, None, None, K.Luu, -Ip, K.Lyu.T, K.cU.T])
+    out.append([None, None, None, K.Lyu, None, K.Lyy, K.cY.T])
+    out.append([None, None, None, K.cU, None, K.cY, None])
+    del q
+    return out
 
 
 class ShiftInvert:
@@ -342,9 +404,12 @@ class ShiftInvert:
             I = sp.identity(N, format="csr")
             dgk = sp.diags(gk)
             A11 = -sigma * sp.diags(w) - dgk @ Hgg @ dgk
-            core = sp.bmat([[A11, -(dgk @ Hgk), -G.T],
-                            [-(Hkg @ dgk), -Hkk, I],
-                            [-G, I, None]], format="csc")
+            blocks = [[A11, -(dgk @ Hgk), -G.T],
+                      [-(Hkg @ dgk), -Hkk, I],
+                      [-G, I, None]]
+            if op.reduced is not None:
+                blocks = _with_implicit_state(blocks, op.reduced, dgk, N)
+            core = sp.bmat(blocks, format="csc")
         else:
             I = np.eye(N)
             A11 = -sigma * np.diag(w) - gk[:, None] * Hgg * gk[None, :]
@@ -353,9 +418,10 @@ class ShiftInvert:
                              [-np.asarray(G), I, np.zeros((N, N))]])
         self._core = core
         r, m = op.rank, R.shape[0]
-        # border columns B1 (3N, r + m), rows B2 (r + m, 3N), corner D
-        B1 = np.zeros((3 * N, r + m))
-        B2 = np.zeros((r + m, 3 * N))
+        n = core.shape[0]
+        # border columns B1 (n, r + m), rows B2 (r + m, n), corner D
+        B1 = np.zeros((n, r + m))
+        B2 = np.zeros((r + m, n))
         if r:
             B1[:N, :r] = -gk[:, None] * op.U[N:]
             B1[N:2 * N, :r] = -op.U[:N]

@@ -2,7 +2,7 @@
 
 Constrained critical points satisfy ``nabla_I E = Lambda . Psi`` (e:Abs-CP) with
 ``Psi_j = nabla_I C_j`` spanning ``ker M-dagger``. The second variation of ``E`` on
-the closed manifold ``C(U) = 0`` is the quadratic form of
+the closed manifold ``C(U) = 0`` is the quadratic form of ::
 
     L_Lambda = nabla_I^2 E - sum_j Lambda_j nabla_I^2 C_j,
 
@@ -10,7 +10,7 @@ not of ``nabla_I^2 E`` alone (e:cF-Hessian is the energy part; the constraint
 Hessians e:cC-Hessian, e:cC-Hessian3 are taken from :mod:`qsa.geometry`, which
 implements their corrected form).
 
-# NOTE: the paper linearizes with ``nabla^2 E`` (e:FOE-Lin); MATH.md section 4 shows
+# NOTE: the paper linearizes with ``nabla^2 E`` (e:FOE-Lin); Conventions and errata, section 4 shows
 # that this is only right when ``Lambda = 0`` and that the correct operator is
 # ``L_Lambda``. Both are available here and in :mod:`qsa.spectra.linearization`.
 
@@ -34,14 +34,17 @@ from qsa.energies.constrained import (
     residual_floor,
     residual_scale,
 )
-from qsa.geometry import constraint_gradients, constraint_hessians
+from qsa.closure import closure_hessian
+from qsa.geometry import constraint_gradients
+from qsa.linalg import ReducedHessian
 
 __all__ = ["hessian", "lagrange_hessian", "LagrangeHessian", "inner_norm", "check_input",
            "DENSE_CONSTRAINT_LIMIT"]
 
-#: Largest N for which the dense constraint Hessians of ``C_1, C_2`` (O(N^2) memory)
-#: are assembled on sparse (finite-difference) grids; above it they are omitted
-#: when their multipliers are negligible (see :func:`lagrange_hessian`).
+#: Largest N for which the constraint Hessians of ``C_1, C_2`` (O(N^2) memory) are
+#: assembled densely on finite-difference grids when the energy Hessian is not itself
+#: factored; above it (or with a factored energy Hessian) they are factored
+#: (:func:`qsa.closure.closure_hessian`).
 DENSE_CONSTRAINT_LIMIT = 1200
 
 
@@ -78,7 +81,7 @@ def check_input(energy, curve):
 
 
 def inner_norm(curve: Curve, f) -> float:
-    """``sqrt(<f, f>)`` for a nodal (N,) or stacked (2N,) vector, ``<.,.> = int . dsigma``.
+    """``sqrt(<f, f>)`` for a nodal (N,) or stacked (2N,) vector, ``<f, h> = int f h dsigma``.
 
     Parameters
     ----------
@@ -143,8 +146,8 @@ class LagrangeHessian:
     ----------
     matrix : matrix, shape (2N, 2N)
         ``L_Lambda = nabla_I^2 E - Lambda . nabla_I^2 C`` (dsigma-self-adjoint); same
-        matrix type as the energy Hessian, except that the dense ``C_1, C_2`` Hessians
-        make it dense when they are included.
+        matrix type as the energy Hessian, except that the ``C_1, C_2`` Hessians, when
+        included, make it dense (small grids) or a :class:`~qsa.linalg.ReducedHessian`.
     energy_hessian : matrix, shape (2N, 2N)
         ``nabla_I^2 E``.
     multipliers : ndarray, shape (3,)
@@ -213,14 +216,17 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     energy : Energy
     curve : Curve
     constraints : {"auto", "all", "curvature"}
-        Which constraint Hessians to subtract. ``"all"``: all three (``C_1, C_2`` are
-        dense, O(N^2) memory). ``"curvature"``: only ``Lambda_3 nabla^2 C_3`` (sparse).
-        ``"auto"`` (default): ``C_3`` always; ``C_1, C_2`` only when significant,
+        Which constraint Hessians to subtract. ``"all"``: all three.
+        ``"curvature"``: only ``Lambda_3 nabla^2 C_3`` (sparse). ``"auto"`` (default):
+        ``C_3`` always; ``C_1, C_2`` only when significant,
         ``|Lambda_j Psi_j| > max(|nabla_I E - Lambda . Psi|, 1e-8 |nabla_I E|)`` (else
         the term is below the accuracy of the projection itself; for the local
-        energies here ``Lambda_{1,2} = 0`` at equilibria, MATH.md section 4). If they
-        are significant on a sparse grid with ``N >`` :data:`DENSE_CONSTRAINT_LIMIT`,
-        a ``ValueError`` is raised (use ``"all"``).
+        energies ``Lambda_{1,2} = 0`` at equilibria, while two-point energies transmit
+        a tension through the base point and have ``Lambda_{1,2} != 0``). ``C_1, C_2``
+        enter through :func:`qsa.closure.closure_hessian`: dense on Fourier grids and
+        on finite-difference grids up to :data:`DENSE_CONSTRAINT_LIMIT` nodes, a
+        factored :class:`~qsa.linalg.ReducedHessian` (O(N) storage) beyond, or
+        whenever the energy Hessian is one.
 
     Returns
     -------
@@ -231,7 +237,7 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     Notes
     -----
     ``Lambda`` is the ``<.,.>``-least-squares solution of ``nabla_I E = Lambda . Psi``
-    (MATH.md section 4); e:Abs-CP, e:cF-Hessian, e:cC-Hessian, e:cC-Hessian3.
+    (Conventions and errata, section 4); e:Abs-CP, e:cF-Hessian, e:cC-Hessian, e:cC-Hessian3.
 
     Examples
     --------
@@ -258,20 +264,17 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     vrel = vres / residual_scale(energy, curve)
     vfloor = residual_floor(energy, curve)
 
-    dense_ok = (not curve.grid.sparse) or curve.N <= DENSE_CONSTRAINT_LIMIT
     floor = max(res_abs, 1e-8 * inner_norm(curve, grad))
     significant = any(abs(Lam[j]) * inner_norm(curve, Psi[j]) > floor for j in range(2))
     use12 = constraints == "all" or (constraints == "auto" and significant)
-    if constraints == "auto" and significant and not dense_ok:
-        raise ValueError(
-            f"curve: Lambda_1,2 = {Lam[:2]} are not negligible, so L_Lambda needs the dense "
-            f"constraint Hessians of C_1, C_2 (N = {curve.N} > {DENSE_CONSTRAINT_LIMIT}); "
-            "pass constraints='all' to assemble them anyway")
-    Hc = constraint_hessians(curve) if use12 else [None, None, _hc3(curve)]
+    weights = Lam.copy() if use12 else np.array([0.0, 0.0, Lam[2]])
+    # dense C_1, C_2 Hessians where the energy Hessian is a matrix anyway (small grids);
+    # factored where it is factored or the grid is large
+    dense = not curve.grid.sparse or (curve.N <= DENSE_CONSTRAINT_LIMIT
+                                      and not isinstance(H, ReducedHessian))
     L = H
-    for j in (2, 0, 1) if use12 else (2,):
-        if Lam[j] != 0.0:
-            L = add_matrices(L, -Lam[j] * Hc[j])
+    if np.any(weights != 0.0):
+        L = add_matrices(H, -closure_hessian(curve, weights, "dense" if dense else "auto"))
     included = (use12, use12, True)
     msg = (f"Lambda = {np.array2string(Lam, precision=6)}; projection residual "
            f"{res_abs:.2e} ({res_rel:.1e} relative); max|V^n| = {vres:.2e} "
@@ -281,18 +284,3 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
         msg += (f"; Lambda_1,2 terms omitted (|Lambda_1,2| = {np.abs(Lam[:2]).max():.1e}, "
                 "below the projection's accuracy)")
     return LagrangeHessian(L, H, Lam, res_abs, res_rel, vres, vrel, included, msg, vfloor)
-
-
-def _hc3(curve: Curve):
-    """``nabla^2 C_3 = [[0, 1/g], [1/g, 0]]`` in the grid's matrix type."""
-    import scipy.sparse as sp
-
-    N = curve.N
-    if curve.grid.sparse:
-        d = sp.diags(1.0 / curve.g)
-        return sp.bmat([[None, d], [d, None]], format="csr")
-    out = np.zeros((2 * N, 2 * N))
-    idx = np.arange(N)
-    out[idx, N + idx] = 1.0 / curve.g
-    out[N + idx, idx] = 1.0 / curve.g
-    return out

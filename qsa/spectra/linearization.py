@@ -1,6 +1,6 @@
 """Linearizations of the gradient flow ``U_t = -M M-dagger nabla_I E`` at an equilibrium.
 
-Four gauges (MATH.md section 4; e:FOE-Lin, e:Meq, e:CVE):
+Four gauges (Conventions and errata, section 4; e:FOE-Lin, e:Meq, e:CVE):
 
 ``"comoving"``
     ``calL = -M M-dagger L_Lambda`` on ``(kappa1, g1)``, shape (2N, 2N), with the
@@ -11,7 +11,7 @@ Four gauges (MATH.md section 4; e:FOE-Lin, e:Meq, e:CVE):
 ``"paper"``
     ``-M M-dagger nabla^2 E`` as printed (e:FOE-Lin), for comparison only.
     # NOTE: it omits the multiplier term ``Lambda . nabla^2 C`` and has spurious
-    # positive eigenvalues when ``Lambda != 0`` (MATH.md section 4).
+    # positive eigenvalues when ``Lambda != 0`` (Conventions and errata, section 4).
 ``"normal"``
     ``J = -[M-dagger L_Lambda M(., 0)]_1``, shape (N, N): the linearization of the
     normal velocity under normal perturbations ``phi``. dsigma-self-adjoint, so its
@@ -94,7 +94,7 @@ def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None):
 
     Examples
     --------
-    The faceting circle (MATH.md section 4): ``lambda_0 = -W''(1) - 2 pi beta``,
+    The faceting circle (Conventions and errata, section 4): ``lambda_0 = -W''(1) - 2 pi beta``,
     ``lambda_2 = -9 (4 alpha^2 + W''(1))`` (double), ``lambda_1 = 0`` (translations):
 
     >>> import numpy as np

@@ -33,7 +33,7 @@ class KernelReport:
     energy_kernel : float
         The same for ``nabla^2 E``. NOT small when ``Lambda_3 != 0``:
         ``nabla^2 E (nabla_s kappa, 0) = (nabla_s d_kE, d_kE nabla_s kappa / g)`` and
-        ``d_kE = Lambda_3`` at equilibrium (MATH.md section 4).
+        ``d_kE = Lambda_3`` at equilibrium (Conventions and errata, section 4).
     energy_kernel_predicted : float
         The relative size of ``Lambda_3 nabla^2 C_3 (nabla_s kappa, 0) =
         (0, Lambda_3 nabla_s kappa / g)``, which ``energy_kernel`` should equal.
@@ -153,7 +153,7 @@ class Spectrum:
         sorted increasingly (floored at the round-off level ``10 eps |J|``), among
         the smallest ``N // 4``. For a splice of 2N fronts (N corners) well apart,
         ``n_small = 2N - 1``: the 2N front positions less the total-turning
-        constraint, i.e. the 2N - 4 free splice parameters (MATH.md section 5) plus
+        constraint, i.e. the 2N - 4 free splice parameters (Conventions and errata, section 5) plus
         the 3 rigid motions; they are small like the residuals, the rest O(1).
     gap_ratio : float
         The ratio at ``n_small`` (how well the cluster is separated).

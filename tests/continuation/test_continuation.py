@@ -6,8 +6,10 @@ from scipy.optimize import brentq, minimize_scalar
 
 from qsa import FiniteDifference, Fourier
 from qsa.continuation import Branch, continuation
+from qsa.continuation.branch import MESSAGES
 from qsa.energies import Faceting, Perimeter
 from qsa.equilibria import circle, npulse
+from tests.helpers import assert_status_convention
 
 K, BETA, ALPHA = 5.0, 5.0, 0.1
 
@@ -63,13 +65,15 @@ def test_natural_continuation_follows_circles_and_stops_at_fold():
     Ls0 = eq.params["L_star"]
     b = continuation(factory(), eq.curve, "L_star", (Ls0, 3.5, -0.1), method="natural")
     _, Lf = circle_fold()
-    assert not b.success and b.status == 3 and "fold" in b.message
+    assert not b.success and b.status == -3 and "fold" in b.message
+    assert_status_convention(b, MESSAGES)
     assert b.values[-1] >= Lf > b.values[-1] - 0.1 - 1e-12
     for p in b.points:
         assert p.param == pytest.approx(circle_L_star(p.curve.kappa[0]), abs=1e-9)
     # below the fold-free range it covers everything
     b2 = continuation(factory(), eq.curve, "L_star", np.linspace(Ls0, 4.0, 5), method="natural")
     assert b2.success and np.allclose(b2.values, np.linspace(Ls0, 4.0, 5))
+    assert_status_convention(b2, MESSAGES)
 
 
 def test_three_pulse_branch_fold_matches_semi_analytic():
@@ -138,7 +142,7 @@ def test_stability_true_uses_spectra_or_says_it_is_missing():
             continuation(*args, stability=True)
         return
     b = continuation(*args, stability=True)
-    # circle spectrum (MATH.md section 4): mode k >= 2 (double) is unstable when
+    # circle spectrum (Conventions and errata, section 4): mode k >= 2 (double) is unstable when
     # alpha^2 k^2 k0^2 + W''(k0) < 0, mode 0 when k0^3 W''(k0) + 2 pi beta < 0
     for p in b.points:
         k0 = p.curve.kappa[0]

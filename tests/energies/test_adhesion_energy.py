@@ -76,7 +76,7 @@ def test_tangential_motion_does_not_change_the_energy():
 
 @pytest.mark.parametrize("seed", [2, 3, 4])
 def test_rigid_invariance_identities(seed):
-    """The extrinsic gradient is orthogonal to ker M; grad_s B = A.tau (MATH.md section 6).
+    """The extrinsic gradient is orthogonal to ker M; grad_s B = A.tau (Conventions, section 6).
 
     Both hold to quadrature accuracy, spectral once the grid resolves l_star
     (measured: 1e-2, 1e-4, 3e-8 at N = 81, 161, 321 for l_star = 0.3).

@@ -215,7 +215,7 @@ def test_long_range_kernel_takes_every_pair_without_a_tree():
 
 
 def test_rigid_invariance_total_force_and_torque_vanish():
-    # Translation and rotation invariance of the discrete energy (MATH.md section 6):
+    # Translation and rotation invariance of the discrete energy (Conventions, section 6):
     # sum_i w_i force_i = 0 and sum_i w_i X_i x force_i = 0, exactly (round-off).
     x, y, w = _random_setup(N=60, seed=7)
     B, F = adhesion_fields(PAPER_CHA, x, y, w, method="dense")
@@ -237,7 +237,7 @@ def test_B_includes_the_diagonal_and_isolated_node():
 
 def test_parallel_strands_optimal_separation():
     # Two long parallel strands at distance D: the normal force on a strand vanishes at
-    # D = l* sqrt(a^2 + 1/2) (MATH.md section 6), attraction beyond, repulsion inside.
+    # D = l* sqrt(a^2 + 1/2) (Conventions, section 6), attraction beyond, repulsion inside.
     k = AdhesionKernel(A0=1.0, l_star=0.05, a=1.0)
     h = 0.004
     s = np.arange(-1.0, 1.0, h)
@@ -282,7 +282,7 @@ def test_uniform_and_general_weight_paths_agree():
 
 @pytest.mark.parametrize("kernel", [PAPER_CHA, AdhesionKernel(A0=3.0, l_star=0.15, a=0.8)])
 def test_rigid_invariance_identities_on_a_closed_curve(kernel):
-    # MATH.md section 6: int (force.n + kappa B)(v0.n) dsigma = 0 and
+    # Conventions and errata, section 6: int (force.n + kappa B)(v0.n) dsigma = 0 and
     # int (force.n + kappa B)(gamma.tau) dsigma = 0, on a smooth non-symmetric closed
     # curve with exact normals/curvature and spectrally accurate trapezoid weights.
     from qsa.energies.adhesion import adhesion_normal_velocity

@@ -162,7 +162,7 @@ def test_faceting_normal_velocity_matches_printed_formula():
 
 
 def test_helfrich_normal_velocity_formula():
-    """V = eps(Lap k + k^3/2) - beta (L - L*) k (MATH.md section 3)."""
+    """V = eps(Lap k + k^3/2) - beta (L - L*) k (Conventions and errata, section 3)."""
     E = ENERGIES["helfrich"]
     c = skew_curve(Fourier(129))
     k = c.kappa

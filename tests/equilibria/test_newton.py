@@ -7,6 +7,7 @@ from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import CanhamHelfrich, Faceting, Perimeter
 from qsa.equilibria import circle, npulse, splice_polygon
 from qsa.equilibria.newton import (
+    MESSAGES,
     EquilibriumSystem,
     PolishResult,
     _cumulative_transpose,
@@ -14,7 +15,7 @@ from qsa.equilibria.newton import (
     polish,
 )
 from qsa.linalg import to_dense
-from tests.helpers import fitted_order, skew_curve
+from tests.helpers import assert_status_convention, fitted_order, skew_curve
 
 K = 5.0
 
@@ -63,6 +64,7 @@ def test_npulse_is_reproduced_and_multipliers():
     eq = npulse(3, 0.15, grid=Fourier(127), nu1=0.2)
     r = polish(eq.energy, eq.curve)
     assert isinstance(r, PolishResult) and r.success and r.status == 0, r.message
+    assert_status_convention(r, MESSAGES)
     assert r.kind == "polished"
     # the semi-analytic N-pulse is exact up to its quadrature: same state
     assert np.max(np.abs(r.curve.kappa - eq.curve.kappa)) < 1e-9
@@ -94,7 +96,8 @@ def test_quadratic_convergence_from_perturbed_npulse():
                   1.01 * c.g, c.grid, c.theta0, c.origin)
     r = polish(eq.energy, guess)
     assert r.success, r.message
-    assert r.n_iter == len(r.history) - 1 and r.n_iter <= 8
+    assert r.n_newton == len(r.history) - 1 and r.n_newton <= 8
+    assert r.n_lu == r.n_newton and r.n_iter == r.n_newton  # one LU per step; the old name
     _assert_quadratic(r)
     # same equilibrium up to the shift fixed by the phase condition
     assert r.params["L"] == pytest.approx(eq.params["L"], rel=1e-12)
@@ -135,7 +138,7 @@ def test_fd_converges_to_fourier_at_order_two():
 def test_circle_stays_put_and_perturbed_circle_returns(grid):
     eq = circle(1.0, 0.1, grid=grid, kstar=K, beta=5.0)
     r = polish(eq.energy, eq.curve)
-    assert r.success and r.n_iter == 0
+    assert r.success and r.n_newton == 0
     assert np.array_equal(r.curve.kappa, eq.curve.kappa)
     guess = Curve.polar(lambda t: 1 + 0.006 * np.cos(3 * t) + 0.004 * np.sin(2 * t), grid)
     r = polish(eq.energy, guess)
@@ -176,8 +179,9 @@ def test_failure_is_reported_not_raised():
     c, s = eq.curve, eq.curve.grid.s
     guess = c.with_kappa(c.kappa + 0.05 * np.cos(2 * np.pi * s))
     r = polish(eq.energy, guess, maxiter=1)
-    assert not r.success and r.status == 2 and "maximum" in r.message
-    assert r.n_iter == 1 and r.history.size == 2 and r.history[1] < r.history[0]
+    assert not r.success and r.status == -1 and "maximum" in r.message
+    assert_status_convention(r, MESSAGES)
+    assert r.n_newton == 1 and r.history.size == 2 and r.history[1] < r.history[0]
     assert np.all(np.isfinite(r.curve.kappa))
 
 
@@ -199,7 +203,7 @@ def test_summary_is_json_ready():
     eq = npulse(3, 0.15, grid=Fourier(101))
     r = polish(eq.energy, eq.curve)
     d = json.loads(json.dumps(r.summary()))
-    assert d["status"] == 0 and d["kind"] == "polished" and len(d["history"]) == r.n_iter + 1
+    assert d["status"] == 0 and d["kind"] == "polished" and len(d["history"]) == r.n_newton + 1
 
 
 def test_cli_polish_option(capsys):

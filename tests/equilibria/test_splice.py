@@ -73,7 +73,7 @@ def test_double_residuals_agree_with_mpmath():
 
 
 def test_residual_scaling_with_alpha():
-    """log R_kappa against 1/alpha has slope -kstar d_min / sqrt(2) (MATH.md section 5)."""
+    """log R_kappa against 1/alpha has slope -kstar d_min / sqrt(2) (Conventions, section 5)."""
     alphas = np.array([0.03, 0.035, 0.04, 0.05])
     logR = []
     for alpha in alphas:

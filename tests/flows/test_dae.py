@@ -370,9 +370,9 @@ def test_jacobian_is_canonical_csc(name):
 
 
 def test_paper_convergence_example_step_count_with_step_doubling():
-    # The appendix example (N = 100, tol 1e-3, physical t = 0.2, MATH.md section 7) with the
-    # paper's step doubling: the paper reports 65 steps. A model regression (sign, scaling)
-    # changes this count or breaks monotone energy decay.
+    # The appendix example (N = 100, tol 1e-3, physical t = 0.2, Conventions and errata,
+    # section 7) with the paper's step doubling: the paper reports 65 steps. A model
+    # regression (sign, scaling) changes this count or breaks monotone energy decay.
     sys = CHA(**PAPER_CHA).setup(*paper_curve(100))
     y, t, k, tol, accepted = sys.y0, 0.0, 1e-5, 1e-3, 0
     energies = [sys.energy(y)]

@@ -9,7 +9,9 @@ from scipy.integrate import solve_ivp
 
 from qsa import Curve, FiniteDifference
 from qsa.flows import CHA, FacetingFlow, FlowResult, solve_flow
+from qsa.flows.solve import MESSAGES
 from qsa.paper import CONVERGENCE
+from tests.helpers import assert_status_convention
 
 PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
 
@@ -40,6 +42,7 @@ def test_energy_non_increasing_and_constraints_held(which, tol):
         init, N, T = wobbly_samples(), 64, 2e-3
     res = solve_flow(model, init, T, N=N, tol=tol)
     assert res.success and res.status == 0 and res.t[-1] == pytest.approx(T, rel=1e-14)
+    assert_status_convention(res, MESSAGES)
     E = res.energy_steps
     scale = np.max(np.abs(E))
     assert np.all(np.diff(E) <= 1e-12 * scale), np.max(np.diff(E))
@@ -60,7 +63,7 @@ def test_energy_non_increasing_and_constraints_held(which, tol):
         k = res.system.curvature(res.states[i])
         assert np.max(np.abs(F[2 * N : 3 * N])) < 1e3 * ntol * np.max(np.abs(k))
     assert len(res.t_steps) == res.n_steps + 1
-    assert res.n_newton >= 3 * res.n_steps and res.n_factorizations >= 1
+    assert res.n_newton >= 3 * res.n_steps and res.n_lu >= 1 and res.n_factorizations == res.n_lu
 
 
 def _circle_radius_errors(method, tol, N=48, T=0.5, eps=0.1, beta=1.0, rho=1.5):
@@ -134,6 +137,7 @@ def test_callback_sees_every_step_and_can_stop():
     res = solve_flow(CHA(eps=0.1, beta=1.0, rho=1.2), wobbly_samples(), 1.0, N=40, tol=1e-3,
                      callback=cb)
     assert res.status == 1 and res.success and res.n_steps == 5
+    assert_status_convention(res, MESSAGES)
     assert seen == list(res.t_steps[1:])
 
 
@@ -144,6 +148,7 @@ def test_newton_failure_is_reported_and_state_kept(tmp_path):
     res = solve_flow(model, wobbly_samples(), 1.0, N=40, tol=1e-3, first_step=10.0,
                      min_step=5.0, checkpoint=path)
     assert not res.success and res.status == -1
+    assert_status_convention(res, MESSAGES)
     assert "Newton" in res.message and str(path) in res.message
     assert path.exists() and res.checkpoint == str(path)
     np.testing.assert_array_equal(res.states[-1], res.system.y0)

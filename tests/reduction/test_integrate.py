@@ -6,12 +6,14 @@ import pytest
 from qsa.equilibria import splice_polygon
 from qsa.paper import SCENARIOS, scenario_splice
 from qsa.reduction.integrate import (
+    MESSAGES,
     ODECollision,
     ODESegment,
     collision_distance,
     collision_sensitivity,
 )
 from qsa.reduction.ode import FrontODE
+from tests.helpers import assert_status_convention
 
 ALPHA, KSTAR = 0.1, 5.0
 
@@ -118,14 +120,16 @@ def test_result_types_and_stop_after_max_collisions(trapezoid):
     ode, p = trapezoid
     r = ode.integrate(p, 0.08, rtol=1e-5, max_collisions=0)
     assert r.status == 1 and r.success and "stopped after collision" in r.message
+    assert_status_convention(r, MESSAGES)
     assert len(r.events) == 1 and len(r.segments) == 1
     seg, ev = r.segments[0], r.first_collision
     assert isinstance(seg, ODESegment) and isinstance(ev, ODECollision)
     assert seg.p.shape == (seg.t.size, p.size) and np.all(seg.L == ode.length)
     assert np.isclose(seg.t[-1], ev.time, rtol=0, atol=0) and r.t.shape == seg.t.shape
     assert r.n_fronts == p.size and np.array_equal(r.positions, seg.p)  # nothing removed yet
-    assert r.nfev > seg.t.size and r.elapsed > 0
+    assert r.n_rhs > seg.t.size and r.nfev == r.n_rhs and r.elapsed > 0
     # no collision before t_final: status 0, no events
     short = ode.integrate(p, 0.2 * ev.time, rtol=1e-5)
     assert short.status == 0 and short.first_collision is None
+    assert_status_convention(short, MESSAGES)
     assert np.isclose(short.t[-1], 0.2 * ev.time)

@@ -1,4 +1,4 @@
-"""Closed-form circle spectra (MATH.md section 4) shared by the spectra tests."""
+"""Closed-form circle spectra (Conventions and errata, section 4) shared by the spectra tests."""
 
 import numpy as np
 
@@ -21,7 +21,7 @@ def faceting_circle_eigenvalues(R, alpha, kstar, beta, kmax):
 def helfrich_circle(R, eps, beta, grid):
     """Circle equilibrium of CanhamHelfrich(eps) + Perimeter(beta, L*).
 
-    beta (2 pi R - L*) = eps / (2 R^2) (MATH.md section 4).
+    beta (2 pi R - L*) = eps / (2 R^2) (Conventions and errata, section 4).
     """
     L_star = 2 * np.pi * R - eps / (2 * R**2 * beta)
     energy = CanhamHelfrich(eps) + Perimeter(beta, L_star)

@@ -14,12 +14,14 @@ import pytest
 from qsa import FiniteDifference, Fourier
 from qsa.equilibria import npulse, polish, splice_polygon
 from qsa.spectra import (
+    MESSAGES,
     FactoredNormalOperator,
     lagrange_hessian,
     normal_operator,
     rigid_normal_basis,
     spectrum,
 )
+from tests.helpers import assert_status_convention
 
 ALPHA = 0.15
 
@@ -168,5 +170,6 @@ def test_unresolved_eigenvalues_are_flagged_not_reported():
     with pytest.warns(UnresolvedEigenvalueWarning, match="failed the accuracy test"):
         s = spectrum(eq.energy, eq.curve, k=12, rtol=1e-14)
     assert s.status == 2 and s.unresolved.size > 0
+    assert_status_convention(s, MESSAGES)
     assert np.all(s.unresolved_errors > 1e-14 * np.abs(s.unresolved))
     assert np.all((s.errors <= 1e-14 * np.abs(s.eigenvalues)) | s.is_kernel)

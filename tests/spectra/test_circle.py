@@ -1,12 +1,12 @@
-"""Circle spectra against the closed form of MATH.md section 4 (all gauges, both grids)."""
+"""Circle spectra against the closed form (Conventions, section 4), all gauges, both grids."""
 
 import numpy as np
 import pytest
 
 from qsa import FiniteDifference, Fourier
 from qsa.equilibria import circle
-from qsa.spectra import linearization, spectrum
-from tests.helpers import fitted_order
+from qsa.spectra import MESSAGES, linearization, spectrum
+from tests.helpers import assert_status_convention, fitted_order
 from tests.spectra.conftest import (
     faceting_circle_eigenvalues,
     helfrich_circle,
@@ -45,6 +45,7 @@ def test_faceting_circle_fourier_normal_gauge(R, alpha, kstar, beta):
     s = spectrum(eq.energy, eq.curve)
     exact, lam0 = faceting_circle_eigenvalues(R, alpha, kstar, beta, (N - 1) // 2)
     assert s.success and s.status == 0 and s.spurious.size == 0
+    assert_status_convention(s, MESSAGES)
     _check_against(s.eigenvalues, exact, s.kernel_tol, 1e-8)
     assert s.n_unstable == _expected_unstable(lam0)
     assert s.n_kernel == 2 and s.kernel.expected_kernel_dimension == 2
@@ -94,7 +95,7 @@ def test_paper_gauge_has_spurious_positive_eigenvalues_on_a_stable_circle():
 
     R = 1, alpha = 0.1, kstar = 5, beta = 5 (Fourier(65)): the true spectrum (J, or the
     comoving -M M-dagger L_Lambda) is <= 0, while the paper's operator has 62 positive
-    eigenvalues, the largest +3427.6 (the value MATH.md section 4 quotes as ~3.4e3).
+    eigenvalues, the largest +3427.6 (the value Conventions and errata, section 4 quotes as ~3.4e3).
     """
     eq = circle(1.0, 0.1, grid=Fourier(65), beta=5.0, kstar=5.0)
     true = spectrum(eq.energy, eq.curve, gauge="comoving", reject_spurious=False)

@@ -7,12 +7,14 @@ import pytest
 from qsa import Curve
 from qsa.equilibria import npulse, polish, splice_polygon
 from qsa.spectra import (
+    MESSAGES,
     NotEquilibriumWarning,
     kernel_report,
     lagrange_hessian,
     normal_operator,
     spectrum,
 )
+from tests.helpers import assert_status_convention
 
 pytestmark = pytest.mark.filterwarnings("error::qsa.spectra.NotEquilibriumWarning")
 
@@ -226,6 +228,7 @@ def test_far_from_equilibrium_warns_with_projection_residual():
     with pytest.warns(NotEquilibriumWarning, match="projection residual"):
         s = spectrum(eq.energy, c)
     assert s.status == 1 and s.success and "not an equilibrium" in s.message
+    assert_status_convention(s, MESSAGES)
     assert s.relative_residual > 1e-3 and s.projection_residual > 0
     with pytest.warns(NotEquilibriumWarning):
         spectrum(eq.energy, c, equilibrium_tol=1e-6)

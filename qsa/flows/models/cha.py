@@ -200,7 +200,7 @@ class CHA(FlowModel):
 
         E = eps/2 int kappa^2 dsigma + beta/2 (L - rho L0)^2 + E_A,
 
-    outward normal velocity (MATH.md section 3)::
+    outward normal velocity (Conventions and errata, section 3)::
 
         V = eps (Delta_s kappa + kappa^3/2) - (B + beta (L - rho L0)) kappa - force . n.
 

@@ -131,7 +131,7 @@ class FacetingFlow(FlowModel):
 
         E = int alpha^2/2 |grad_s kappa|^2 + W(kappa) dsigma + beta/2 (L - L*)^2.
 
-    Outward normal velocity (MATH.md section 3, e:Facet-NV)::
+    Outward normal velocity (Conventions and errata, section 3, e:Facet-NV)::
 
         V = -G(mu) - kappa (g d_g E),   G = -Delta_s - kappa^2,
         mu = -alpha^2 Delta_s kappa + W'(kappa),

@@ -1,0 +1,53 @@
+"""Spectra with a two-point (adhesion) energy: the implicit-state Hessian in the factored solve."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from qsa import Curve, FiniteDifference, Fourier
+from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
+from qsa.linalg import ReducedHessian, to_dense
+from qsa.spectra import (
+    FactoredNormalOperator,
+    certified_eigenpairs,
+    lagrange_hessian,
+    rigid_normal_basis,
+    spectrum,
+)
+
+
+def _cha(c, l_star):
+    return (CanhamHelfrich(0.1) + Perimeter(1.0, 1.2 * c.length())
+            + Adhesion(A0=10.0, l_star=l_star, a=1.0))
+
+
+@pytest.mark.parametrize("N, l_star", [(240, 0.05), (600, 0.1)])
+def test_reduced_hessian_solves_agree_with_the_formed_matrix(N, l_star):
+    c = Curve.polar(lambda t: 1 + 0.3 * np.cos(3 * t) + 0.05 * np.sin(5 * t),
+                    FiniteDifference(N))
+    LH = lagrange_hessian(_cha(c, l_star), c, constraints="curvature")
+    assert isinstance(LH.matrix, ReducedHessian)
+    op = FactoredNormalOperator.from_lagrangian(c, LH.matrix)
+    assert op.reduced is not None
+    Jd = to_dense(op.form())
+    x = np.random.default_rng(0).standard_normal(N)
+    assert np.linalg.norm(op.matvec(x) - Jd @ x) <= 1e-12 * np.linalg.norm(Jd @ x)
+    rigid = op.ritz(rigid_normal_basis(c))[0]
+    sol = certified_eigenpairs(op, np.zeros((0, N)), k=8, sigma=0.0, rigid=rigid)
+    dense = np.linalg.eigvals(Jd).real
+    for lam, err in zip(sol.values, sol.errors):
+        near = dense[np.argmin(np.abs(dense - lam))]
+        # the formed matrix's own round-off is eps |J|: the certified value lies within it
+        assert abs(near - lam) <= err + 1e-13 * np.max(np.abs(dense))
+        assert err <= 1e-8 * max(abs(lam), 1.0)
+
+
+@pytest.mark.parametrize("grid", [Fourier(129), FiniteDifference(400)])
+def test_spectrum_accepts_canham_helfrich_adhesion(grid):
+    c = Curve.polar(lambda t: 1 + 0.2 * np.cos(3 * t), grid)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # not an equilibrium: the operator at the curve
+        s = spectrum(_cha(c, 0.1), c, k=6)
+    assert s.success and s.eigenvalues.size == 6
+    assert np.all(s.errors <= 1e-6 * np.maximum(np.abs(s.eigenvalues), 1.0))
