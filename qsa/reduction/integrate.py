@@ -7,7 +7,9 @@ fronts collides, removes the pair, closes the remaining positions again and goes
 *Collisions.* When two neighbouring fronts come within ``d_c`` -- the spacing at which
 the superposed pair no longer crosses ``kstar / 2`` (:func:`collision_distance`,
 ``2 ln 3 / lambda`` for the quartic well) -- the splice manifold ends: the pair is
-removed, the remaining positions are closed again (minimum-norm Gauss-Newton,
+removed, its turning is given to the neighbouring corners (:func:`remove_pair`: the
+total turning is conserved and, as in the flow, stays where it was), the remaining
+positions are closed again (minimum-norm Gauss-Newton,
 :func:`qsa.equilibria.close_positions`) and the integration continues.
 
 *Validity.* The reduction neglects the slaving of the fast modes (the perimeter mode,
@@ -244,15 +246,13 @@ def remove_pair(p, ids, i, length, redistribute="local"):
     gap = (p[j] - p[i]) % length
     P = np.asarray(p, dtype=float).copy()
     if redistribute == "local":
-        grow = np.zeros(n)
-        if i % 2 == 0:  # a corner collapses: its neighbours take its turning
+        if i % 2 == 0:  # a corner collapses: its neighbours (up, up + 1) take its turning
             for up in ((i - 2) % n, (i + 2) % n):
-                grow[up] += 0.5 * gap
-        else:  # a facet collapses: the merged corner (i - 1, j + 1) loses its length
-            grow[(i - 1) % n] -= gap
-        for up in np.nonzero(grow)[0]:
-            P[up] -= 0.5 * grow[up]
-            P[(up + 1) % n] += 0.5 * grow[up]
+                P[up] -= 0.25 * gap
+                P[(up + 1) % n] += 0.25 * gap
+        else:  # a facet collapses: the merged corner (i - 1, j + 1) loses the facet's length
+            P[(i - 1) % n] += 0.5 * gap
+            P[(j + 1) % n] -= 0.5 * gap
     keep = np.ones(n, dtype=bool)
     keep[[i, j]] = False
     q, qids = P[keep], np.asarray(ids)[keep]
