@@ -49,7 +49,9 @@ from qsa.continuation.steps import (
     tangent,
 )
 from qsa.curve import Curve
-from qsa.equilibria.newton import _equal_arclength, _Factor, newton_solve
+from qsa.equilibria.newton import newton_solve
+from qsa.equilibria.system import equal_arclength
+from qsa.linalg import factorize
 from qsa.spectra.symmetry import BlochSymmetry, detect_symmetry, sector_spectrum
 
 __all__ = ["continuation"]
@@ -184,7 +186,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     max_steps = integer(max_steps, "max_steps", minimum=0)
     vals, step = parse_span(values)
     p0 = float(vals[0])
-    guess = _equal_arclength(curve)
+    guess = equal_arclength(curve)
     prob = Problem(energy_factory, guess, p0, constraints)
     run = newton_solve(prob.system, prob.system.pack(guess), tol, max(maxiter, 30),
                        energy=energy_factory(p0))
@@ -211,7 +213,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
 # --------------------------------------------------------------------------- natural
 def _natural(factory, prob, x, vals, param, stab, opts):
     tol, maxiter = opts["tol"], opts["maxiter"]
-    det = _Factor(prob.system.jacobian(x, factory(vals[0]))).det_sign()
+    det = factorize(prob.system.jacobian(x, factory(vals[0]))).det_sign()
     y0 = np.append(x, vals[0])
     points = [make_point(prob, y0, np.nan, det, stab.record(factory(vals[0]),
                                                             prob.system.curve(x)))]
@@ -243,7 +245,7 @@ def _natural(factory, prob, x, vals, param, stab, opts):
                 status = 1
                 msg = f"{MESSAGES[1]}: between {param}={vals[k - 1]:.8g} and {p:.8g}"
                 break
-            det = _Factor(prob.system.jacobian(run.x, factory(p))).det_sign()
+            det = factorize(prob.system.jacobian(run.x, factory(p))).det_sign()
             points.append(make_point(prob, y, np.nan, det, stab.record(factory(p), c),
                                      run.status, run.history, run.n_newton, run.n_lu))
             states.append(y)

@@ -22,6 +22,7 @@ exactly. A second Ctrl-C aborts at once.
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sys
@@ -34,8 +35,11 @@ import numpy as np
 
 from qsa._checks import integer, real_number
 from qsa._version import __version__
+from qsa.curve import Curve
 from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
 from qsa.io import load_npz, save_npz
+from qsa.polygon import self_intersections
+from qsa.resample import closed_samples, resample_closed
 
 __all__ = ["solve_flow", "FlowResult", "FlowInterrupted", "prepare_initial"]
 
@@ -170,9 +174,6 @@ def prepare_initial(initial, N=None):
     ValueError
         For NaN, open or self-intersecting data, fewer than 4 points, or a bad N.
     """
-    from qsa.curve import Curve, self_intersections
-    from qsa.resample import closed_samples, resample_closed
-
     if isinstance(initial, Curve):
         x, y = initial.positions()
     else:
@@ -520,8 +521,6 @@ def _load_checkpoint(path, model, options):
 
 
 def _comparable(d):
-    import json
-
     return json.loads(json.dumps(d, default=str))
 
 

@@ -58,10 +58,12 @@ import numpy as np
 
 from qsa.energies.wells import resolve_well
 from qsa.equilibria import heteroclinic
-from qsa.equilibria.splice import SpliceProfile, default_cutoff
+from qsa.equilibria.profile import SpliceProfile
+from qsa.equilibria.splice import default_cutoff
 from qsa.reduction import manifold
 from qsa.reduction.backends import NumpyBackend, select_backend
 from qsa.reduction.correction import D2_STENCIL, folded_band
+from qsa.reduction.fronts import detect_fronts
 from qsa.reduction.integrate import (
     FrontODEResult,
     ODECollision,
@@ -344,14 +346,12 @@ class FrontODE:
 
     def crossings(self, p, cutoff=None):
         """Crossings of ``kstar/2`` by the splice profile (the detector's front positions)."""
-        from qsa.reduction.fronts import detect_fronts
-
         prof = self.profile(p, cutoff)
         f = detect_fronts(prof(self.sigma), self.front.kstar, self.length)
         return f.positions
 
     def integrate(self, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method="auto",
-                  max_collisions=10, close=True):
+                  max_collisions=10, close=True, redistribute="local"):
         """Integrate ``p' = F(p)`` from ``p0``, removing colliding pairs.
 
         See :func:`qsa.reduction.integrate.integrate_fronts` for the parameters.
@@ -363,4 +363,4 @@ class FrontODE:
         if not (np.isfinite(t_final) and t_final > 0):
             raise ValueError(f"t_final must be positive, got {t_final!r}")
         return integrate_fronts(self, self._check(p0), t_final, t_eval, rtol, atol, method,
-                                max_collisions, close)
+                                max_collisions, close, redistribute)

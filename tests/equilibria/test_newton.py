@@ -6,14 +6,8 @@ import pytest
 from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import CanhamHelfrich, Faceting, FunctionalizedCurvature, Perimeter
 from qsa.equilibria import circle, npulse, splice_polygon
-from qsa.equilibria.newton import (
-    MESSAGES,
-    EquilibriumSystem,
-    PolishResult,
-    _cumulative_transpose,
-    normal_velocity,
-    polish,
-)
+from qsa.equilibria.newton import MESSAGES, PolishResult, normal_velocity, polish
+from qsa.equilibria.system import EquilibriumSystem, _cumulative_transpose
 from qsa.linalg import to_dense
 from tests.helpers import assert_status_convention, fitted_order, skew_curve
 
@@ -212,6 +206,16 @@ def test_line_search_keeps_faceting_step_counts():
     rect = splice_polygon([np.pi / 2] * 4, [1.0, 1.5, 1.0, 1.5], 0.1, grid=Fourier(255))
     r = polish(rect.energy, rect.curve)
     assert r.success and r.n_newton <= 6
+
+
+def test_params_record_every_scalar_parameter_of_the_energy():
+    energy, guess = _functionalized_off_family(4, Fourier(101))
+    r = polish(energy, guess)
+    p = r.params
+    assert (p["alpha"], p["eta"], p["kstar"], p["beta"]) == (0.2, 1.0, K, 5.0)
+    assert p["L_star"] == energy.terms()[1].L_star
+    assert p["nu2"] == pytest.approx(5.0 * (r.curve.length() - p["L_star"]), rel=1e-12)
+    assert all(isinstance(v, float) for v in p.values())
 
 
 def test_polish_never_returns_a_worse_state_than_its_guess():
