@@ -46,6 +46,20 @@ in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``,
 exact derivatives of the grid's quadrature of ``C`` with ``theta = theta0 + D kappa``.
 Finite-difference grids give a sparse ``N x N`` block bordered by 4 dense
 rows and columns, factored by sparse LU: O(N) per Newton step.
+
+Two-point energies
+------------------
+Summands with their own ``normal_velocity_jacobian`` (:class:`~qsa.energies.Adhesion`,
+whose ``V^n = -(force . n + kappa B)`` is evaluated from the node positions) are
+differentiated exactly through the positions ``Y = (theta, x, y)``: ``dV = V_U dU +
+V_Y dY`` with ``cY dY + cU dU = 0`` (:mod:`qsa.energies.adhesion_velocity`). On
+finite-difference grids ``dY`` are extra unknowns of the Newton matrix (a
+:class:`StateBorder`: lower-bidiagonal state rows, pair-sparse ``V_Y``), so it keeps
+O(N + pairs) entries; on Fourier grids, or when most node pairs interact, ``V_Y Z`` is
+formed densely. The rigid-motion identities ``<V^n, phi_j> = 0`` then hold to the
+grid's accuracy: spectrally on Fourier grids, but only to O(h^2) on finite
+differences, where the unfolding ``a`` is O(h^2) and carries ``max|V^n|`` (the
+polished state solves ``V^n = -a.phi`` exactly; the message says so).
 """
 
 from __future__ import annotations
@@ -58,9 +72,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from qsa._checks import integer, real_number
-from qsa.curve import Curve
+from qsa.curve import Curve, check_simple
 from qsa.discretize import FiniteDifference
 from qsa.energies import Energy
+from qsa.energies.base import EnergySum
 from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
 from qsa.equilibria.result import Equilibrium
 from qsa.geometry import laplace_s
@@ -352,8 +367,11 @@ class EquilibriumSystem:
             Closure (and phase) rows, derivatives w.r.t. kappa.
         D : ndarray (m', m)
             Their derivatives w.r.t. ``(L, a)``.
-        low : list of (P, Q)
-            Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians).
+        low : list of (P, Q) and StateBorder
+            Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians), and on
+            finite-difference grids the implicit position state of two-point terms
+            (:class:`StateBorder`; their ``V^n`` is differentiated exactly through
+            ``normal_velocity_jacobian``, the other terms through their Hessian).
         """
         energy = self.energy if energy is None else energy
         N = self.N
@@ -361,23 +379,33 @@ class EquilibriumSystem:
         c = self.curve(x)
         L = x[N]
         k = c.kappa
-        grad = energy.gradient(c)
-        mu, xi = grad[:N], L * grad[N:]
-        H = energy.hessian(c)
-        Hkk, Hgk, Hcol, lowH = _blocks(H, N)
-        lap = laplace_s(c)
-        Gm = lap + grid.diag(k**2)  # = -G
-        diag = grid.diag
-        A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
+        local, implicit = split_velocity_terms(energy)
         low = []
-        if lowH is not None:
-            Pk, Pg, Q = lowH
-            low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
+        if local is None:
+            A = sp.csr_matrix((N, N)) if grid.sparse else np.zeros((N, N))
+            VL = np.zeros(N)
+        else:
+            grad = local.gradient(c)
+            mu, xi = grad[:N], L * grad[N:]
+            H = local.hessian(c)
+            Hkk, Hgk, Hcol, lowH = _blocks(H, N)
+            lap = laplace_s(c)
+            Gm = lap + grid.diag(k**2)  # = -G
+            diag = grid.diag
+            A = Gm @ Hkk + diag(2 * k * mu - xi) - diag(k * L) @ Hgk
+            if lowH is not None:
+                Pk, Pg, Q = lowH
+                low.append((Gm @ Pk - (k * L)[:, None] * Pg, Q))
+            dmu = Hcol[:N] - mu / L
+            dxi = L * Hcol[N:]
+            VL = Gm @ dmu - (2.0 / L) * (lap @ mu) - k * dxi
+        if implicit:
+            J = implicit[0].normal_velocity_jacobian(c)
+            for t in implicit[1:]:
+                J = J + t.normal_velocity_jacobian(c)
+            A, VL = _add_velocity_jacobian(J, A, VL, low)
         if sp.issparse(A):
             A = A.tocsr()
-        dmu = Hcol[:N] - mu / L
-        dxi = L * Hcol[N:]
-        VL = Gm @ dmu - (2.0 / L) * (lap @ mu) - k * dxi
         B = np.column_stack([VL, self.phi.T])
         # closure rows: exact derivatives of the quadrature of C
         w = grid.weights
@@ -414,11 +442,84 @@ class EquilibriumSystem:
         return _assemble(A, B, Crows, D, low)
 
 
+def split_velocity_terms(energy):
+    """``(local, implicit)``: the summands whose ``V^n`` is the generic formula, and the others.
+
+    ``implicit`` holds the terms with their own ``normal_velocity_jacobian`` (two-point
+    energies, whose ``V^n`` is evaluated from the node positions); ``local`` is the sum of
+    the rest (``None`` if there is none), differentiated through its Hessian.
+
+    Parameters
+    ----------
+    energy : Energy
+
+    Returns
+    -------
+    local : Energy or None
+    implicit : tuple of Energy
+    """
+    terms = energy.terms()
+    implicit = tuple(t for t in terms if hasattr(t, "normal_velocity_jacobian"))
+    rest = tuple(t for t in terms if not hasattr(t, "normal_velocity_jacobian"))
+    if not rest:
+        return None, implicit
+    return (rest[0] if len(rest) == 1 else EnergySum(rest)), implicit
+
+
+@dataclass(frozen=True, eq=False)
+class StateBorder:
+    """Extra unknowns of the Newton matrix: an implicit state ``Y1`` with sparse equations.
+
+    The ``V^n`` rows get ``VY Y1``; the state rows are ``cK dkappa + cL dL + cY Y1 = 0``
+    (:func:`_assemble` puts them after every other unknown).
+
+    Attributes
+    ----------
+    VY : sparse matrix, shape (N, m)
+    cY : sparse matrix, shape (m, m)
+    cK : sparse matrix, shape (m, N)
+    cL : ndarray, shape (m,)
+    """
+
+    VY: object
+    cY: object
+    cK: object
+    cL: np.ndarray
+
+
+def _add_velocity_jacobian(J, A, VL, low):
+    """Add ``dV^n/d(kappa, L)`` of a :class:`~qsa.energies.adhesion_velocity.VelocityJacobian`.
+
+    ``g = L`` constant, so ``d/dL`` is the sum of the ``g`` columns. Finite differences
+    with a short-range kernel: the positions stay extra unknowns (a :class:`StateBorder`
+    appended to ``low``), so the Newton matrix stays sparse with O(N + pairs) entries;
+    Fourier grids, or more pair entries than ``N^2``: ``V_U + V_Y Z`` dense.
+    """
+    N = J.curve.N
+    ones = np.ones(N)
+    if sp.issparse(A) and J.VY.nnz < N * N:
+        cY, cU = J.state_equations()
+        low.append(StateBorder(J.VY, cY, cU[:, :N].tocsr(), cU[:, N:] @ ones))
+        return A + J.VU[:, :N], VL + J.VU[:, N:] @ ones
+    # a long-range kernel (most node pairs interact): the sparse LU would fill in, the
+    # dense Jacobian is the smaller problem
+    Jd = J.dense()
+    A = A.toarray() if sp.issparse(A) else A
+    return A + Jd[:, :N], VL + Jd[:, N:] @ ones
+
+
 def _assemble(A, B, Crows, D, low):
-    """``[[A, B, P], [Crows, D, 0], [Q^T, 0, -I]]`` (low-rank terms of A unfolded)."""
-    if low:
-        P = np.hstack([p for p, _ in low])
-        Q = np.hstack([q for _, q in low])
+    """``[[A, B, P, VY], [Crows, D, 0, 0], [Q^T, 0, -I, 0], [cK, cL e_1^T, 0, cY]]``.
+
+    ``low`` holds low-rank terms ``(P, Q)`` of ``A`` (unfolded as extra unknowns) and
+    :class:`StateBorder` implicit states (finite differences only), in this order of
+    the extra unknowns.
+    """
+    pairs = [t for t in low if not isinstance(t, StateBorder)]
+    states = [t for t in low if isinstance(t, StateBorder)]
+    if pairs:
+        P = np.hstack([p for p, _ in pairs])
+        Q = np.hstack([q for _, q in pairs])
         r = P.shape[1]
     else:
         r = 0
@@ -429,7 +530,16 @@ def _assemble(A, B, Crows, D, low):
             blocks[0].append(sp.csr_matrix(P))
             blocks[1].append(None)
             blocks.append([sp.csr_matrix(Q.T), None, -sp.identity(r)])
+        for st in states:
+            for row in blocks:
+                row.append(None)
+            blocks[0][-1] = st.VY
+            cLB = sp.csr_matrix((st.cL, (np.arange(st.cL.size), np.zeros(st.cL.size, int))),
+                                shape=(st.cL.size, mB))
+            blocks.append([st.cK, cLB] + [None] * (len(blocks[0]) - 3) + [st.cY])
         return sp.bmat(blocks, format="csc")
+    if states:
+        raise ValueError("implicit-state borders need a sparse (finite-difference) Newton matrix")
     top = np.hstack([A, B] + ([P] if r else []))
     mid = np.hstack([Crows, D] + ([np.zeros((mC, r))] if r else []))
     rows = [top, mid]
@@ -468,6 +578,14 @@ class _Factor:
             piv = self.lu[1]
             s *= (-1) ** int(np.sum(piv != np.arange(piv.size)))
         return s
+
+
+def _newton_step(fac, F):
+    """``-J^{-1} F`` for the unknowns of ``F``; extra unknowns (low-rank and state borders,
+    whose rows have zero residual) are dropped."""
+    b = np.zeros(fac.n)
+    b[:F.size] = F
+    return -fac.solve(b)[:F.size]
 
 
 def _perm_parity(p) -> int:
@@ -587,7 +705,7 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
             if fac.singular:
                 status = -2
                 break
-            dx = -fac.solve(F)
+            dx = _newton_step(fac, F)
         except (RuntimeError, np.linalg.LinAlgError, ValueError):
             status = -2
             break
@@ -679,7 +797,8 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
     Raises
     ------
     ValueError
-        ``energy``/``curve`` of the wrong type, ``tol <= 0`` or ``maxiter < 0``.
+        ``energy``/``curve`` of the wrong type, a curve that crosses or touches itself
+        (the message names the closest pair of nodes), ``tol <= 0`` or ``maxiter < 0``.
 
     Notes
     -----
@@ -699,6 +818,7 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True) -> 
     (True, True)
     """
     _check_curve(energy, curve)
+    check_simple(curve)
     tol = real_number(tol, "tol", positive=True)
     maxiter = integer(maxiter, "maxiter", minimum=0)
     guess = _equal_arclength(curve)
@@ -737,6 +857,11 @@ def polish_result(energy, system, run: NewtonRun, reparameterized=False) -> Poli
         msg += "; the guess was reparameterized to constant g"
     a = np.array(x[system.N + 1:], dtype=float)
     unfolding = a if system.n_unfold == 3 else np.concatenate([a, [0.0]])
+    if len(run.history) and res > 10 * run.history[-1] * scale:
+        msg += (f"; max|V^n| is the unfolding's (|a| = {np.abs(a).max():.1e}): the three "
+                "rigid-motion identities of V^n hold on this grid only to its order "
+                "(two-point energies on finite differences), so V^n = -a.phi is the "
+                "discrete equilibrium")
     return PolishResult(c, energy, _params(energy, c, Lambda), Lambda, res, clo, scale,
                         kind="polished", success=status >= 0, message=msg, status=status,
                         n_newton=run.n_newton, n_lu=run.n_lu,
