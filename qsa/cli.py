@@ -16,7 +16,7 @@ import sys
 from qsa._version import __version__
 
 #: Subcommand modules under ``qsa.commands``, in the order ``--help`` lists them.
-SUBCOMMANDS = ["demo", "equilibrium", "spectrum", "flow", "reproduce", "sweep"]
+SUBCOMMANDS = ["demo", "equilibrium", "spectrum", "bifurcate", "flow", "reproduce", "sweep"]
 
 
 def build_parser() -> argparse.ArgumentParser:

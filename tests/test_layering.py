@@ -24,9 +24,11 @@ FORBIDDEN = {
     "continuation": {"flows", "plotting"},
     "reduction": {"plotting"},
     "geometry": {"energies", "equilibria", "spectra", "flows", "continuation"},
+    "constraints": {"energies", "equilibria", "spectra", "flows", "continuation"},
     "closure": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "curve": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "discretize": {"curve", "geometry", "energies", "equilibria", "spectra", "flows"},
+    "polygon": {"discretize", "curve", "geometry", "energies", "equilibria", "spectra", "flows"},
     "plotting": set(),
 }
 # the paper's reproductions use the library, never the other way

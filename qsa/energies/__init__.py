@@ -2,12 +2,14 @@
 
 Each energy provides ``energy``, ``gradient`` (nabla_I E in <f,h> = int f h dsigma),
 ``normal_velocity`` (outward V^n) and ``hessian`` (nabla_I^2 E); energies add with ``+``.
+Energies of the enclosed area (``Pressure``, ``AreaPenalty``) are in :mod:`qsa.energies.area`.
 On the closed manifold, ``normal_velocity``, ``multipliers`` (Lambda of
 ``nabla_I E = Lambda . Psi``) and ``residual_scale`` are functions of the energy
 (:mod:`qsa.energies.constrained`); the double wells are in :mod:`qsa.energies.wells`.
 """
 
 from qsa.energies.adhesion import Adhesion, AdhesionKernel
+from qsa.energies.area import AreaEnergy, AreaPenalty, Pressure
 from qsa.energies.base import Energy, EnergySum, Perimeter
 from qsa.energies.constrained import multipliers, normal_velocity, residual_floor, residual_scale
 from qsa.energies.faceting import Faceting
@@ -20,6 +22,9 @@ from qsa.energies.wells import DoubleWell, QuarticWell, Well, is_quartic, resolv
 __all__ = [
     "Adhesion",
     "AdhesionKernel",
+    "AreaEnergy",
+    "AreaPenalty",
+    "Pressure",
     "Energy",
     "EnergySum",
     "Perimeter",

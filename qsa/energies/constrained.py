@@ -8,9 +8,11 @@ spectra and the continuation alike:
 ``normal_velocity(energy, curve)``
     ``V^n = -[M-dagger nabla_I E]_1`` (e:L2grad); ``V^n = 0`` is the equilibrium
     equation (e:Abs-CP), since ``M-dagger`` kills exactly ``span Psi``.
-``multipliers(energy, curve)``
+``multipliers(energy, curve, constraints=None)``
     ``Lambda`` of ``nabla_I E = Lambda . Psi`` (e:Abs-CP): the projection of
-    ``nabla_I E`` on ``span Psi`` in ``<f, h> = int f h dsigma``.
+    ``nabla_I E`` on ``span Psi`` in ``<f, h> = int f h dsigma``; with length or area
+    constraints (:mod:`qsa.constraints`) also their multipliers ``mu_c`` in
+    ``nabla_I E = Lambda . Psi + sum_c mu_c nabla_I c``.
 ``residual_scale(energy, curve)``
     The largest single term of ``V^n``; ``max|V^n| / residual_scale`` is the
     relative residual every solver reports.
@@ -67,7 +69,9 @@ def residual_scale(energy, curve: Curve) -> float:
     ``energy.gradient_parts(curve)`` (each density of a local energy, each other
     summand whole). For ``Faceting + Perimeter`` the terms are ``alpha^2 Delta_s^2
     kappa``, ``Delta_s W'(kappa)``, ``kappa^2 mu`` and ``kappa g d_g E``.
-    ``max|V^n| / residual_scale`` is the relative residual.
+    ``max|V^n| / residual_scale`` is the relative residual. An energy with a
+    ``velocity_scale(curve)`` method (the area energies, whose ``V^n`` is a constant)
+    contributes that instead.
 
     Parameters
     ----------
@@ -89,10 +93,15 @@ def residual_scale(energy, curve: Curve) -> float:
     """
     N = curve.N
     scale = 0.0
-    for grad in energy.gradient_parts(curve):
-        mu, xi = grad[:N], curve.g * grad[N:]
-        for t in (apply_laplace_s(curve, mu), curve.kappa**2 * mu, curve.kappa * xi):
-            scale = max(scale, float(np.max(np.abs(t))))
+    for term in energy.terms():
+        own = getattr(term, "velocity_scale", None)
+        if own is not None:  # an energy with its own exact V^n (e.g. a pressure)
+            scale = max(scale, float(own(curve)))
+            continue
+        for grad in term.gradient_parts(curve):
+            mu, xi = grad[:N], curve.g * grad[N:]
+            for t in (apply_laplace_s(curve, mu), curve.kappa**2 * mu, curve.kappa * xi):
+                scale = max(scale, float(np.max(np.abs(t))))
     return scale if scale > 0 else 1.0
 
 
@@ -138,12 +147,12 @@ def residual_floor(energy, curve: Curve, probes=2, seed=0) -> float:
     return worst
 
 
-def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
-    """Lagrange multipliers ``Lambda`` of ``nabla_I E = Lambda . Psi`` (e:Abs-CP), shape (3,).
+def multipliers(energy, curve: Curve, gradient=None, constraints=None) -> np.ndarray:
+    """Lagrange multipliers of ``nabla_I E = Lambda.Psi + sum_c mu_c nabla_I c`` (e:Abs-CP).
 
-    The least-squares projection of ``nabla_I E`` onto ``span Psi`` in
-    ``<f, h> = int f h dsigma``: ``G Lambda = b`` with the Gram matrix
-    ``G_ij = <Psi_i, Psi_j>`` and ``b_i = <Psi_i, nabla_I E>``, solved by least
+    The least-squares projection of ``nabla_I E`` onto ``span Psi`` (and the gradients of
+    the extra constraints) in ``<f, h> = int f h dsigma``: ``G Lambda = b`` with the Gram
+    matrix ``G_ij = <Psi_i, Psi_j>`` and ``b_i = <Psi_i, nabla_I E>``, solved by least
     squares (``rcond = 1e-12``) so that a degenerate Gram matrix is handled.
 
     Parameters
@@ -152,11 +161,14 @@ def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
     curve : Curve
     gradient : ndarray, shape (2N,), optional
         ``nabla_I E`` in ``<f, h> = int f h dsigma`` if already computed.
+    constraints : sequence of qsa.constraints.Constraint, optional
+        Length / area constraints whose multipliers ``mu_c`` are appended.
 
     Returns
     -------
-    ndarray, shape (3,)
-        ``(Lambda_1, Lambda_2, Lambda_3)``; on an equilibrium ``nu1 = -Lambda_3``.
+    ndarray, shape (3 + m,)
+        ``(Lambda_1, Lambda_2, Lambda_3, mu_1, ..., mu_m)``; on an equilibrium
+        ``nu1 = -Lambda_3``; ``mu_A`` is the pressure and ``-mu_L`` the line tension.
 
     Examples
     --------
@@ -169,6 +181,8 @@ def multipliers(energy, curve: Curve, gradient=None) -> np.ndarray:
     [0.0, 0.0, 6.0]
     """
     Psi = constraint_gradients(curve)
+    if constraints:
+        Psi = np.vstack([Psi] + [con.gradient(curve)[None, :] for con in constraints])
     grad = energy.gradient(curve) if gradient is None else gradient
     w = np.concatenate([curve.dsigma, curve.dsigma])
     G = (Psi * w) @ Psi.T

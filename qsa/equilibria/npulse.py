@@ -10,7 +10,7 @@ periodic orbit (:mod:`qsa.equilibria.orbit`) whose pulse turns the tangent by
 rotated by ``2 pi / N`` from the previous. Its length is ``L = N T`` (T the period).
 
 On such a state ``d_kappa E = -nu1`` and ``g d_g E = -(nu1 psi + nu2) + beta (L - L*)``,
-so (Conventions and errata, section 5)
+so (Conventions and errata, section 5) ::
 
     V^n = -G(-nu1) - psi (-(nu1 psi + nu2) + beta (L - L*)) = psi (nu2 - beta (L - L*)),
 
@@ -30,7 +30,7 @@ well of P whose level is reached first. For ``nu1 = 0`` and a symmetric well
 (``W(k) = W(kstar - k)``) the orbit is symmetric about ``c = kstar/2``, so
 ``Theta = kstar T / 2`` increases from ``Theta_0 = pi alpha kstar / sqrt(-W''(kstar/2))``
 to infinity and an N-pulse exists iff ``N Theta_0 < 2 pi``, i.e.
-``N alpha kstar < 2 sqrt(-W''(kstar/2))``. For the quartic ``W''(kstar/2) = -kstar^2/4``:
+``N alpha kstar < 2 sqrt(-W''(kstar/2))``. For the quartic ``W''(kstar/2) = -kstar^2/4``: ::
 
     N alpha < 1.
 
@@ -43,7 +43,9 @@ from __future__ import annotations
 import numpy as np
 
 from qsa._checks import integer, real_number
+from qsa.curve import Curve
 from qsa.discretize import Fourier, Grid
+from qsa.energies import Faceting, Perimeter
 from qsa.energies.wells import resolve_well
 from qsa.equilibria.orbit import orbit_with_turning
 from qsa.equilibria.result import Equilibrium
@@ -213,9 +215,6 @@ def npulse(n_pulses, alpha, well=None, grid=None, nu1=0.0, beta=5.0, kstar=None)
     >>> bool(eq.success), eq.params["nu2"] < 0, eq.params["L"] < eq.params["L_star"]
     (True, True, True)
     """
-    from qsa.curve import Curve
-    from qsa.energies import Faceting, Perimeter
-
     n = integer(n_pulses, "n_pulses", minimum=2, too_small=(
         "{name}={value}: need at least {minimum} pulses (one pulse turns by 2 pi in a "
         "single facet and cannot close into an N-fold symmetric curve)"))
@@ -271,9 +270,6 @@ def circle(R, alpha, grid=None, beta=5.0, well=None, kstar=None):
     >>> round(eq.params["L_star"], 10) == round(2 * np.pi - (6.0 - 4.0) / 5.0, 10)
     True
     """
-    from qsa.curve import Curve
-    from qsa.energies import Faceting, Perimeter
-
     R = real_number(R, "R", positive=True)
     alpha = real_number(alpha, "alpha", positive=True)
     beta = real_number(beta, "beta", positive=True)

@@ -16,7 +16,7 @@ the normal velocities ``phi_j^perp`` of the positions, and the force is
 restrict ``p`` to a manifold of dimension ``2N - 3``; the base point is fixed by
 ``sum p_j' = 0``. The constrained gradient flow of ``E(p)`` in the metric ``G``
 (equivalently the Galerkin projection of ``V^n`` on the tangent space,
-``min |V^n - sum p_j' phi_j^perp|``) is the saddle-point system
+``min |V^n - sum p_j' phi_j^perp|``) is the saddle-point system ::
 
     [ G   A^T ] [ p' ]   [ -dE/dp ]
     [ A   0   ] [ mu ] = [    0   ],    A = [ dC/dp ; 1^T / sqrt(2N) ],
@@ -58,10 +58,12 @@ import numpy as np
 
 from qsa.energies.wells import resolve_well
 from qsa.equilibria import heteroclinic
-from qsa.equilibria.splice import SpliceProfile, default_cutoff
+from qsa.equilibria.profile import SpliceProfile
+from qsa.equilibria.splice import default_cutoff
 from qsa.reduction import manifold
 from qsa.reduction.backends import NumpyBackend, select_backend
 from qsa.reduction.correction import D2_STENCIL, folded_band
+from qsa.reduction.fronts import detect_fronts
 from qsa.reduction.integrate import (
     FrontODEResult,
     ODECollision,
@@ -344,8 +346,6 @@ class FrontODE:
 
     def crossings(self, p, cutoff=None):
         """Crossings of ``kstar/2`` by the splice profile (the detector's front positions)."""
-        from qsa.reduction.fronts import detect_fronts
-
         prof = self.profile(p, cutoff)
         f = detect_fronts(prof(self.sigma), self.front.kstar, self.length)
         return f.positions

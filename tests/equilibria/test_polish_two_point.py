@@ -15,7 +15,8 @@ import pytest
 from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import Adhesion, CanhamHelfrich, Faceting, Perimeter
 from qsa.equilibria import polish
-from qsa.equilibria.newton import EquilibriumSystem, StateBorder
+from qsa.equilibria.newton import EquilibriumSystem
+from qsa.equilibria.two_point_terms import StateBorder
 from qsa.spectra import spectrum
 from tests.helpers import fitted_order
 

@@ -1,0 +1,504 @@
+"""Constraints of a closed curve: closure (always), a fixed length, a fixed enclosed area.
+
+Closure ``C(U) = 0`` (e:C1, e:C2) is part of every problem; its gradients ``Psi_j``
+and Hessians are :func:`qsa.geometry.constraint_gradients` and
+:func:`qsa.geometry.constraint_hessians`. This module adds the two optional scalar
+constraints of the bifurcation problems, each with its value, its gradient and
+Hessian in ``<f, h> = int f h dsigma``, and its *normal variation* ``n_c``: the
+first variation of ``c`` when the curve moves with outward normal velocity ``V``,
+
+    d/dt c = <n_c, V>,        n_L = kappa,        n_A = 1.
+
+``FixedLength(L=None)``, ``FixedArea(A=None)``
+    Exact constraints ``c(U) = c*`` with Lagrange multipliers ``mu_c`` next to the
+    closure multipliers ``Lambda``: constrained equilibria satisfy
+
+        nabla_I E = Lambda . Psi + sum_c mu_c nabla_I c,
+
+    equivalently ``V^n + sum_c mu_c n_c = 0`` (``V^n`` the energy's outward normal
+    velocity), so ``mu_A`` is the pressure that holds the shape (an equilibrium of
+    ``E + Pressure(p)`` is one of ``E`` at fixed area with ``mu_A = p``) and
+    ``-mu_L`` the line tension. ``None`` takes the value of the curve the
+    constraint is first bound to (:func:`bind_constraints`).
+
+The enclosed area in intrinsic variables
+----------------------------------------
+With ``D f = int_0^s f dsigma``, ``theta = theta0 + D kappa``, ``tau = (cos theta,
+sin theta)``, ``n = (sin theta, -cos theta)`` (outward) and ``gamma = gamma0 + D tau``,
+
+    A(U) = 1/2 int gamma . n dsigma,
+
+evaluated with the grid's quadrature (:meth:`qsa.curve.Curve.area`). Its exact
+discrete derivatives follow from writing, with ``C`` the grid's cumulative-integral
+matrix (``D f = C (f g)``) and ``K = diag(w) C / 2`` (``w`` the quadrature weights),
+
+    A = 1/2 sum_j w_j g_j (x0 sin theta_j - y0 cos theta_j)
+        + sum_jk K_jk g_j g_k sin(theta_j - theta_k),
+
+a function of ``(theta, g)``, composed with ``theta = theta0 + C (kappa g)``:
+
+* gradient (reverse mode, O(N) on finite differences): with ``b = C^T (w g n / 2)``
+  (per component) and ``a = -g (b . n) + w g (gamma . tau) / 2 = dA/dtheta``,
+  ``dA/dkappa = g C^T a`` and ``dA/dg = w (gamma . n) / 2 + tau . b + kappa C^T a``;
+  the ``<.,.>``-gradient divides both by ``dsigma = w g``;
+* Hessian: with ``Ka = K - K^T``, ``S_jk = sin(theta_j - theta_k)``,
+  ``Co_jk = cos(theta_j - theta_k)`` and ``beta = dA/dg`` at fixed ``theta``,
+  ``A_thth = -diag(g beta) + diag(g) (Ka o S) diag(g)``, ``A_thg = diag(a / g) +
+  diag(g) (Ka o Co)``, ``A_gg = Ka o S``; with ``T = dtheta/dU = [C diag(g), C diag(kappa)]``
+  and ``E_g = [0, I]``, the Euclidean Hessian is
+  ``T^T A_thth T + T^T A_thg E_g + E_g^T A_thg^T T + E_g^T A_gg E_g``
+  ``+ [[0, diag(C^T a)], [diag(C^T a), 0]]`` (the last term from the product
+  ``kappa g`` inside ``theta``), and the ``<.,.>``-Hessian is ``W2^{-1}`` times it,
+  ``W2 = diag(dsigma, dsigma)``.
+
+On a closed curve the first variation along a normal motion is ``<1, V>``: the
+gradient ``nabla_I A`` maps to ``-[M-dagger nabla_I A]_1 = -1`` (the normal velocity
+of the energy ``A``), up to the discretization error of ``M-dagger``. The length
+``L = int g ds`` has ``nabla_I L = (0, 1/g)`` and ``nabla_I^2 L = 0`` exactly, and
+``-[M-dagger nabla_I L]_1 = -kappa``.
+
+The constrained linearization
+-----------------------------
+With all multipliers, the second variation is that of the Lagrangian,
+``L_full = nabla^2 E - Lambda . nabla^2 C - sum_c mu_c nabla^2 c``, and the
+constrained gradient flow ``V = V^n(U) + sum_c mu_c(t) n_c`` chooses ``mu_c(t)`` so
+that ``<n_c, V> = 0`` (each constraint conserved): ``V`` is the
+``<.,.>``-orthogonal projection of ``V^n`` onto ``T = {phi : <n_c, phi> = 0}``. Its
+linearization at an equilibrium is ``P J P`` on ``T``, ``P`` that projection and
+``J = -[M-dagger L_full M(., 0)]_1``: self-adjoint on ``T``, so its spectrum is real.
+The directions ``n_c`` are excluded from the problem, not reported as eigenvalues.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from qsa._checks import real_number
+from qsa.curve import Curve
+
+__all__ = [
+    "Constraint",
+    "FixedLength",
+    "FixedArea",
+    "bind_constraints",
+    "constraint_normals",
+    "area_gradient",
+    "area_gradient_euclidean",
+    "area_hessian",
+    "length_gradient",
+    "length_hessian",
+]
+
+
+# ----------------------------------------------------------------- the area
+def _area_parts(c: Curve):
+    """``(a, beta, b)``: ``dA/dtheta``, ``dA/dg`` at fixed ``theta``, ``b = C^T (w g n / 2)``."""
+    grid = c.grid
+    w, g = grid.weights, c.g
+    th = c.theta()
+    tau = np.array([np.cos(th), np.sin(th)])
+    n = np.array([np.sin(th), -np.cos(th)])
+    gam = c.positions()
+    b = grid.cumulative_transpose((0.5 * w * g * n).T).T  # (2, N)
+    a = -g * np.sum(b * n, axis=0) + 0.5 * w * g * np.sum(gam * tau, axis=0)
+    beta = 0.5 * w * np.sum(gam * n, axis=0) + np.sum(tau * b, axis=0)
+    return a, beta
+
+
+def area_gradient_euclidean(c: Curve) -> np.ndarray:
+    """Exact derivative ``dA/dU`` of the discrete area :meth:`~qsa.curve.Curve.area`, (2N,).
+
+    The plain (Euclidean) gradient, ``A(U + d U1) = A + d (dA/dU) . U1 + O(d^2)``
+    (no inner-product weights): the row of a Newton matrix.
+
+    Parameters
+    ----------
+    c : Curve
+
+    Returns
+    -------
+    ndarray, shape (2N,)
+        Stacked ``[dA/dkappa, dA/dg]``; ``area_gradient(c) * [dsigma, dsigma]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, FiniteDifference
+    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), FiniteDifference(32))
+    >>> U1 = np.concatenate([np.cos(2 * np.pi * c.grid.s), np.ones(32)])
+    >>> d = 1e-6
+    >>> fd = (c.with_U(c.U + d * U1).area() - c.with_U(c.U - d * U1).area()) / (2 * d)
+    >>> bool(np.isclose(fd, area_gradient_euclidean(c) @ U1, rtol=1e-8))
+    True
+    """
+    a, beta = _area_parts(c)
+    ca = c.grid.cumulative_transpose(a)
+    return np.concatenate([c.g * ca, beta + c.kappa * ca])
+
+
+def area_gradient(c: Curve) -> np.ndarray:
+    """``nabla_I A`` in ``<f, h> = int f h dsigma``: the exact gradient of the discrete area, (2N,).
+
+    ``d/d delta A(U + delta U1) = <nabla_I A, U1>`` exactly for the discrete area and
+    inner product (module docstring). On a closed curve it is, up to the
+    discretization, ``(-|gamma - gamma0|^2 / 2, (-kappa |gamma - gamma0|^2 / 2 +
+    (gamma - gamma0) . n) / g)`` plus a combination of the closure gradients ``Psi_j``.
+
+    Parameters
+    ----------
+    c : Curve
+
+    Returns
+    -------
+    ndarray, shape (2N,)
+        Stacked ``[d_kappa A, d_g A]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier, geometry
+    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(65))
+    >>> V = -(geometry.M_adjoint(c) @ area_gradient(c))[:65]  # the normal velocity of A
+    >>> bool(np.allclose(V, -1.0, atol=1e-8))
+    True
+    """
+    w = np.concatenate([c.dsigma, c.dsigma])
+    return area_gradient_euclidean(c) / w
+
+
+def area_hessian(c: Curve) -> np.ndarray:
+    """``nabla_I^2 A`` in ``<f, h> = int f h dsigma``: the exact Hessian of the discrete area.
+
+    ``d^2/d delta^2 A(U + delta U1) = <H U1, U1>`` along straight paths, at every ``U``
+    (closed or not); the formula is in the module docstring.
+
+    Parameters
+    ----------
+    c : Curve
+
+    Returns
+    -------
+    ndarray, shape (2N, 2N)
+        Dense (the cumulative integrals couple all nodes); ``W2 H`` is symmetric,
+        ``W2 = diag(dsigma, dsigma)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(33))
+    >>> U1 = np.concatenate([np.cos(2 * np.pi * c.grid.s), 0.3 * np.ones(33)])
+    >>> A = lambda t: c.with_U(c.U + t * U1).area()
+    >>> d, w = 1e-3, np.concatenate([c.dsigma, c.dsigma])
+    >>> second = (A(d) - 2 * A(0) + A(-d)) / d**2
+    >>> bool(np.isclose(second, (area_hessian(c) @ U1) @ (U1 * w), rtol=1e-5))
+    True
+    """
+    grid = c.grid
+    N = c.N
+    w, g, k = grid.weights, c.g, c.kappa
+    th = c.theta()
+    a, beta = _area_parts(c)
+    C = grid.cumulative_matrix()
+    K = 0.5 * w[:, None] * C
+    Ka = K - K.T
+    dth = th[:, None] - th[None, :]
+    KS = Ka * np.sin(dth)
+    Att = -np.diag(g * beta) + g[:, None] * KS * g[None, :]
+    Atg = np.diag(a / g) + g[:, None] * (Ka * np.cos(dth))
+    T = np.hstack([C * g[None, :], C * k[None, :]])  # d theta / dU, (N, 2N)
+    H = T.T @ (Att @ T)
+    cross = T.T @ Atg  # (2N, N): the columns acting on g
+    H[:, N:] += cross
+    H[N:, :] += cross.T
+    H[N:, N:] += KS
+    ca = C.T @ a
+    idx = np.arange(N)
+    H[idx, N + idx] += ca
+    H[N + idx, idx] += ca
+    W2 = np.concatenate([c.dsigma, c.dsigma])
+    return H / W2[:, None]
+
+
+# ---------------------------------------------------------------- the length
+def length_gradient(c: Curve) -> np.ndarray:
+    """``nabla_I L = (0, 1/g)`` in ``<f, h> = int f h dsigma``, ``L = int g ds``, shape (2N,).
+
+    Parameters
+    ----------
+    c : Curve
+
+    Returns
+    -------
+    ndarray, shape (2N,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(9))
+    >>> bool(np.allclose(length_gradient(c)[9:], 1 / (2 * np.pi)))
+    True
+    """
+    return np.concatenate([np.zeros(c.N), 1.0 / c.g])
+
+
+def length_hessian(c: Curve):
+    """``nabla_I^2 L = 0`` (``L`` is linear in ``g``), in the grid's matrix type, (2N, 2N).
+
+    Parameters
+    ----------
+    c : Curve
+
+    Returns
+    -------
+    sparse CSR matrix (finite differences) or ndarray (Fourier), shape (2N, 2N)
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> float(abs(length_hessian(Curve.circle(1.0, Fourier(9)))).max())
+    0.0
+    """
+    n = 2 * c.N
+    return sp.csr_matrix((n, n)) if c.grid.sparse else np.zeros((n, n))
+
+
+# ------------------------------------------------------------ the constraints
+class Constraint(ABC):
+    """A scalar constraint ``c(U) = target`` on a closed curve (see the module docstring).
+
+    Subclasses are frozen dataclasses with one field, the target (``None``: the
+    value of the curve it is bound to), and implement :meth:`value`,
+    :meth:`gradient`, :meth:`hessian` and :meth:`normal_variation`.
+    """
+
+    #: short name of the constrained quantity (``"L"``, ``"A"``)
+    symbol = ""
+
+    @property
+    @abstractmethod
+    def target(self):
+        """The prescribed value, or ``None`` until bound (:meth:`bind`)."""
+
+    @abstractmethod
+    def value(self, c: Curve) -> float:
+        """The constrained quantity at ``c``."""
+
+    @abstractmethod
+    def gradient(self, c: Curve) -> np.ndarray:
+        """Its gradient in ``<f, h> = int f h dsigma``, shape (2N,)."""
+
+    @abstractmethod
+    def hessian(self, c: Curve):
+        """Its Hessian in ``<f, h> = int f h dsigma``, shape (2N, 2N)."""
+
+    @abstractmethod
+    def normal_variation(self, c: Curve) -> np.ndarray:
+        """``n_c`` with ``d/dt c = <n_c, V>`` under outward normal velocity ``V``, shape (N,)."""
+
+    def euclidean_gradient(self, c: Curve) -> np.ndarray:
+        """``dc/dU`` without inner-product weights (a Newton row), shape (2N,)."""
+        return self.gradient(c) * np.concatenate([c.dsigma, c.dsigma])
+
+    def bind(self, c: Curve) -> Constraint:
+        """This constraint with ``target = value(c)`` if it was ``None``."""
+        if self.target is not None:
+            return self
+        return replace(self, **{self._field: self.value(c)})
+
+    def defect(self, c: Curve) -> float:
+        """``value(c) - target`` (the constraint must be bound)."""
+        if self.target is None:
+            raise ValueError(f"{type(self).__name__}: bind the constraint to a curve first "
+                             "(bind_constraints)")
+        return self.value(c) - self.target
+
+    def params(self) -> dict:
+        """JSON-serialisable description, e.g. ``{"constraint": "FixedArea", "A": 3.14}``."""
+        return {"constraint": type(self).__name__, self._field: self.target}
+
+
+def _target(value, name):
+    return None if value is None else real_number(value, name, positive=True)
+
+
+@dataclass(frozen=True)
+class FixedLength(Constraint):
+    """The exact constraint ``L(U) = int g ds = L`` with a Lagrange multiplier.
+
+    Parameters
+    ----------
+    L : float, optional
+        Prescribed length, ``> 0``; ``None``: the length of the curve it is bound to.
+
+    Notes
+    -----
+    ``nabla_I L = (0, 1/g)``, ``nabla_I^2 L = 0`` and the normal variation is
+    ``n_L = kappa`` (``d/dt L = int kappa V dsigma``, exactly also for the discrete
+    length under ``U_t = M(V, 0)``, since ``g_t = g kappa V``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> con = FixedLength().bind(c)
+    >>> round(con.target / np.pi, 12), round(con.defect(c), 12)
+    (2.0, 0.0)
+    """
+
+    L: float = None
+    symbol = "L"
+    _field = "L"
+
+    def __post_init__(self):
+        object.__setattr__(self, "L", _target(self.L, "L"))
+
+    @property
+    def target(self):
+        return self.L
+
+    def value(self, c):
+        return c.length()
+
+    def gradient(self, c):
+        return length_gradient(c)
+
+    def hessian(self, c):
+        return length_hessian(c)
+
+    def normal_variation(self, c):
+        return np.array(c.kappa)
+
+
+@dataclass(frozen=True)
+class FixedArea(Constraint):
+    """The exact constraint ``A(U) = 1/2 int gamma . n dsigma = A`` with a Lagrange multiplier.
+
+    Parameters
+    ----------
+    A : float, optional
+        Prescribed enclosed area, ``> 0``; ``None``: the area of the curve it is bound to.
+
+    Notes
+    -----
+    Gradient and Hessian are the exact derivatives of the discrete area
+    (:func:`area_gradient`, :func:`area_hessian`); the normal variation is ``n_A = 1``
+    (``d/dt A = int V dsigma``). The multiplier is the pressure holding the shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(2.0, Fourier(17))
+    >>> round(FixedArea().bind(c).target / np.pi, 12)
+    4.0
+    """
+
+    A: float = None
+    symbol = "A"
+    _field = "A"
+
+    def __post_init__(self):
+        object.__setattr__(self, "A", _target(self.A, "A"))
+
+    @property
+    def target(self):
+        return self.A
+
+    def value(self, c):
+        return c.area()
+
+    def gradient(self, c):
+        return area_gradient(c)
+
+    def euclidean_gradient(self, c):
+        return area_gradient_euclidean(c)
+
+    def hessian(self, c):
+        return area_hessian(c)
+
+    def normal_variation(self, c):
+        return np.ones(c.N)
+
+
+def bind_constraints(constraints, curve: Curve) -> tuple:
+    """Validate ``constraints`` and bind each to ``curve`` (``None`` targets -> its values).
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint or None
+        E.g. ``[FixedLength(), FixedArea(A=3.0)]``; ``None`` or empty: no constraint.
+    curve : Curve
+
+    Returns
+    -------
+    tuple of Constraint
+        Bound copies, in the order given.
+
+    Raises
+    ------
+    ValueError
+        An entry that is not a :class:`Constraint`, or the same kind twice.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> [type(k).__name__ for k in bind_constraints([FixedArea(), FixedLength()], c)]
+    ['FixedArea', 'FixedLength']
+    >>> bind_constraints([FixedLength(), FixedLength(6.0)], c)
+    Traceback (most recent call last):
+    ...
+    ValueError: constraints: FixedLength is given twice; pass each constraint at most once
+    """
+    if constraints is None:
+        return ()
+    if isinstance(constraints, Constraint):
+        constraints = (constraints,)
+    try:
+        items = tuple(constraints)
+    except TypeError:
+        raise ValueError("constraints must be a list of FixedLength() / FixedArea(), "
+                         f"got {type(constraints).__name__}") from None
+    seen = set()
+    out = []
+    for con in items:
+        if not isinstance(con, Constraint):
+            raise ValueError("constraints must contain qsa.constraints.FixedLength / FixedArea "
+                             f"objects, got {type(con).__name__}")
+        kind = type(con).__name__
+        if kind in seen:
+            raise ValueError(f"constraints: {kind} is given twice; pass each constraint at "
+                             "most once")
+        seen.add(kind)
+        out.append(con.bind(curve))
+    return tuple(out)
+
+
+def constraint_normals(constraints, curve: Curve) -> np.ndarray:
+    """The normal variations ``n_c`` of the constraints as rows, shape (m, N).
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint
+    curve : Curve
+
+    Returns
+    -------
+    ndarray, shape (m, N)
+        ``d/dt c = <n_c, V>`` for outward normal velocity ``V``.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(2.0, Fourier(9))
+    >>> constraint_normals([FixedLength(), FixedArea()], c)[:, 0].tolist()
+    [0.5, 1.0]
+    """
+    return np.array([con.normal_variation(curve) for con in constraints]).reshape(-1, curve.N)
