@@ -48,11 +48,13 @@ from qsa.continuation.steps import (
     parse_span,
     tangent,
 )
+from qsa.constraints import bind_constraints
 from qsa.curve import Curve
+from qsa.discretize import Fourier
 from qsa.equilibria.newton import _equal_arclength, _Factor, newton_solve
 from qsa.spectra.symmetry import BlochSymmetry, detect_symmetry, sector_spectrum
 
-__all__ = ["continuation"]
+__all__ = ["continuation", "touches_itself"]
 
 
 class _Stability:
@@ -185,7 +187,8 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     vals, step = parse_span(values)
     p0 = float(vals[0])
     guess = _equal_arclength(curve)
-    prob = Problem(energy_factory, guess, p0, constraints)
+    cons = bind_constraints(constraints, guess) or None
+    prob = Problem(energy_factory, guess, p0, cons)
     run = newton_solve(prob.system, prob.system.pack(guess), tol, max(maxiter, 30),
                        energy=energy_factory(p0))
     if not run.success:
@@ -239,7 +242,7 @@ def _natural(factory, prob, x, vals, param, stab, opts):
             n_newton += run.n_newton
             y = np.append(run.x, p)
             c = prob.system.curve(run.x)
-            if opts["contact"] and c.self_intersects():
+            if opts["contact"] and touches_itself(c):
                 status = 1
                 msg = f"{MESSAGES[1]}: between {param}={vals[k - 1]:.8g} and {p:.8g}"
                 break
@@ -311,8 +314,8 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
                     break
                 continue
             cnew = prob.system.curve(y_new[:n])
-            if opts["contact"] and cnew.self_intersects():
-                y_c, its_c = _last_before_contact(prob, y, t, ds, tol, maxiter)
+            if opts["contact"] and touches_itself(cnew):
+                y_c, its_c, p_in = _last_before_contact(prob, y, t, ds, tol, maxiter)
                 if y_c is not None:
                     prob = prob.rebased(prob.system.curve(y_c[:n]), float(y_c[-1]))
                     y_c = np.concatenate([prob.system.pack(prob.system.curve(y_c[:n])),
@@ -327,8 +330,9 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
                     states.append(y_c)
                     steps += 1
                 status = 1
+                p_in = y_new[-1] if not np.isfinite(p_in) else p_in
                 msg = (f"{MESSAGES[1]}: the curve touches itself between {param}="
-                       f"{points[-1].param:.8g} and {y_new[-1]:.8g}")
+                       f"{points[-1].param:.10g} and {p_in:.10g}")
                 break
             steps += 1
             prob = prob.rebased(cnew, float(y_new[-1]))
@@ -393,22 +397,40 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
                   factory, tuple(prob.constraints or ()))
 
 
-def _last_before_contact(prob, y, t, ds, tol, maxiter, bisections=8):
-    """Bisection of the step ``ds`` for the last state without self-contact."""
+def touches_itself(curve: Curve, refine=4) -> bool:
+    """Whether the curve crosses or touches itself (its polygon, on a finer grid for Fourier).
+
+    On a Fourier grid the curve is resampled to about ``refine`` times the nodes first, so
+    that the chords of the polygon follow the smooth curve closely (their distance to it
+    is ``h^2 kappa / 8``).
+    """
+    if isinstance(curve.grid, Fourier) and refine > 1:
+        curve = curve.on_grid(Fourier(refine * curve.N + (refine * curve.N + 1) % 2))
+    return curve.self_intersects()
+
+
+def _last_before_contact(prob, y, t, ds, tol, maxiter, rtol=1e-9, max_bisections=40):
+    """Bisection of the step ``ds`` for the last state without self-contact.
+
+    Returns ``(y_last, iterations, p_contact)``: the last contact-free state found, its
+    corrector iterations, and the parameter of the first state found in contact.
+    """
     n = y.size - 1
     a, b = 0.0, ds
-    best, best_its = None, 0
-    for _ in range(bisections):
+    best, best_its, p_in = None, 0, np.nan
+    for _ in range(max_bisections):
+        if b - a <= rtol * ds:
+            break
         m = 0.5 * (a + b)
         ym, ok, its = corrector(prob, y + m * t, t, tol, maxiter)
         if not ok:
             b = m
             continue
-        if prob.system.curve(ym[:n]).self_intersects():
-            b = m
+        if touches_itself(prob.system.curve(ym[:n])):
+            b, p_in = m, float(ym[-1])
         else:
             a, best, best_its = m, ym, its
-    return best, best_its
+    return best, best_its, p_in
 
 
 def _locate_fold(prob, ya, pa, pb, ta, index, tol, maxiter, refine):
