@@ -231,24 +231,24 @@ def _natural(factory, prob, x, vals, param, stab, opts):
                 frac = (p - vals[k - 1]) / (vals[k - 1] - vals[k - 2])
                 pred[: prob.N + 1] += frac * (states[-1][: prob.N + 1]
                                               - states[-2][: prob.N + 1])
-            run = newton_solve(prob.system, prob.project(pred), tol, maxiter, energy=factory(p))
-            if not run.success:
+            e_p = np.zeros(pred.size + 1)
+            e_p[-1] = 1.0  # the corrector's hyperplane p = const: Newton at fixed p
+            y, ok, its = corrector(prob, np.append(pred, p), e_p, tol, maxiter)
+            if not ok:
                 n_rej += 1
                 status = -3
-                msg = (f"{MESSAGES[-3]}: at {param}={p:.8g} (relative residual "
-                       f"{run.history.min():.2e}); the fold lies between {vals[k - 1]:.8g} "
-                       f"and {p:.8g}")
+                msg = (f"{MESSAGES[-3]}: at {param}={p:.8g} (no convergence in {maxiter} "
+                       f"Newton steps); the fold lies between {vals[k - 1]:.8g} and {p:.8g}")
                 break
-            n_newton += run.n_newton
-            y = np.append(run.x, p)
-            c = prob.system.curve(run.x)
+            n_newton += its
+            c = prob.system.curve(y[:-1])
             if opts["contact"] and touches_itself(c):
                 status = 1
                 msg = f"{MESSAGES[1]}: between {param}={vals[k - 1]:.8g} and {p:.8g}"
                 break
-            det = _Factor(prob.system.jacobian(run.x, factory(p))).det_sign()
-            points.append(make_point(prob, y, np.nan, det, stab.record(factory(p), c),
-                                     run.status, run.history, run.n_newton, run.n_lu))
+            det = _Factor(prob.system.jacobian(y[:-1], factory(p))).det_sign()
+            points.append(make_point(prob, y, np.nan, det, stab.record(factory(p), c), 0, (),
+                                     its, its))
             states.append(y)
             probs.append(prob)
     except SOLVER_ERRORS as exc:
@@ -260,12 +260,12 @@ def _natural(factory, prob, x, vals, param, stab, opts):
 
         def f(p):
             frac = (p - ya[-1]) / (yb[-1] - ya[-1])
-            guess = ya[:-1] + frac * (yb[:-1] - ya[:-1])
-            r = newton_solve(probs[i + 1].system, probs[i + 1].project(guess), tol,
-                             maxiter + 10, energy=factory(p))
-            if not r.success:
+            guess = ya + frac * (yb - ya)
+            e_p = np.zeros(guess.size)
+            e_p[-1] = 1.0
+            yy, ok, _ = corrector(probs[i + 1], guess, e_p, tol, maxiter + 10)
+            if not ok:
                 return None
-            yy = probs[i + 1].project(np.append(r.x, p))
             return equilibrium(probs[i + 1], yy), p, yy
         return f, ya[-1], yb[-1]
 
@@ -507,8 +507,14 @@ def _one_crossing(points, stab, solve_at, i, sym, b, j, mult, sign, fold_at, opt
     fa = stab.values[i][1][b][j]
     fb = stab.values[i + 1][1][b][j]
     kind = "fold" if (i in fold_at and b == 0) else "branch"
-    if not opts["locate"] or not fa * fb < 0:
+    if not opts["locate"] or (fa == 0 and fb == 0):
         return None
+    if not fa * fb < 0:
+        # an end is zero within its error (not counted as unstable): the crossing is there
+        if abs(fa) <= abs(fb):
+            fa = -np.sign(fb) * max(abs(fa), 1e-300)
+        else:
+            fb = -np.sign(fa) * max(abs(fb), 1e-300)
     f, t0, t1 = solve_at(i)
     best = locate_crossing(f, lambda eq: stab.eigenvalue(eq, sym, b, j), t0, t1, fa, fb,
                            opts["ptol"])
