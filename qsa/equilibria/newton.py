@@ -61,12 +61,11 @@ from qsa._checks import integer, real_number
 from qsa.curve import Curve
 from qsa.discretize import FiniteDifference
 from qsa.energies import Energy
-from qsa.constraints import bind_constraints, constraint_normals
+from qsa.constraints import bind_constraints, constraint_normals, flow_multipliers
 from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
 from qsa.equilibria.constraint_terms import (
     area_energy_jacobian,
     constraint_jacobian,
-    initial_multipliers,
     split_area_energies,
 )
 from qsa.equilibria.result import Equilibrium
@@ -279,11 +278,10 @@ class EquilibriumSystem:
         """Unknowns ``x = [kappa (N,), L, a (n_unfold,), mu (m,)]`` of a constant-g curve.
 
         ``a = 0``; ``mu`` (the constraints' multipliers) defaults to the projection of
-        ``V^n`` of :attr:`energy` (:func:`~qsa.equilibria.constraint_terms.initial_multipliers`).
+        ``V^n`` of :attr:`energy` (:func:`qsa.constraints.flow_multipliers`).
         """
         if mu is None:
-            mu = (initial_multipliers(self.constraints, curve,
-                                      normal_velocity(self.energy, curve))
+            mu = (flow_multipliers(self.constraints, curve, normal_velocity(self.energy, curve))
                   if self.m else np.zeros(0))
         return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold),
                                np.asarray(mu, dtype=float).reshape(self.m)])
