@@ -45,7 +45,7 @@ def ring(N=65, eps=1.0):
                         constraints=[FixedLength()])
     out = [("circle", main)]
     for bif in [b for b in main.bifurcations if b.sector in (2, 3)]:
-        for b in switch_branch(main, bif, span=(-40.0, 0.0, 0.25), max_steps=400):
+        for b in switch_branch(main, bif, span=(-40.0, 0.0, 0.25), ds_max=0.5, max_steps=400):
             out.append((f"n = {bif.sector}", b))
     return out
 
@@ -59,11 +59,14 @@ def report(name, build):
         return
     total = time.perf_counter() - t0
     print(f"\n{name}: {total:.2f} s for the diagram")
-    print(f"{'branch':<10}{'points':>8}{'bifs':>6}{'solves':>8}{'solves/pt':>11}  status")
+    print(f"{'branch':<10}{'points':>8}{'count solves/pt':>16}{'bifs':>6}"
+          f"{'locate solves/bif':>19}  status")
     for label, b in rows:
-        n = max(len(b.points), 1)
-        print(f"{label:<10}{len(b.points):>8}{len(b.bifurcations):>6}{b.n_eigensolves:>8}"
-              f"{b.n_eigensolves / n:>11.2f}  {b.message[:70]}")
+        n = len(b.points)
+        count = (b.n_eigensolves - b.n_locate_solves) / max(n, 1)
+        per_bif = b.n_locate_solves / len(b.bifurcations) if b.bifurcations else 0.0
+        print(f"{label:<10}{n:>8}{count:>16.2f}{len(b.bifurcations):>6}{per_bif:>19.2f}  "
+              f"{b.message[:56]}")
 
 
 def main():

@@ -271,7 +271,10 @@ class Branch:
     symmetry : BlochSymmetry or None
         The symmetry kept along the branch (the sectors of ``sector_unstable``).
     n_eigensolves : int
-        Shift-invert eigen-solves (one factorization each) spent on stability.
+        Shift-invert eigen-solves (one factorization each) spent on stability: one per
+        point for the count, plus :attr:`n_locate_solves`.
+    n_locate_solves : int
+        Those spent locating the crossings (one per trial point).
     energy_factory : callable
         The family ``p -> Energy`` of the branch.
     constraints : tuple
@@ -309,6 +312,7 @@ class Branch:
     bifurcations: tuple = ()
     symmetry: object = None
     n_eigensolves: int = 0
+    n_locate_solves: int = 0
     energy_factory: object = field(default=None, repr=False)
     constraints: tuple = ()
     origin: object = field(default=None, repr=False)
@@ -367,4 +371,5 @@ class Branch:
             [int(n) for n in self.n_unstable],
             "bifurcations": [b.summary() for b in self.bifurcations],
             "n_eigensolves": int(self.n_eigensolves),
+            "n_locate_solves": int(self.n_locate_solves),
         }

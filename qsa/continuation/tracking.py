@@ -60,15 +60,17 @@ __all__ = ["continuation", "touches_itself"]
 class _Stability:
     """Stability of the points of one branch: sector counts (or a user callable)."""
 
-    def __init__(self, stability, symmetry: BlochSymmetry, k=None):
+    def __init__(self, stability, symmetry: BlochSymmetry, constraints=None, k=None):
         if not (stability is None or isinstance(stability, bool) or callable(stability)):
             raise ValueError(f"stability must be a bool or a callable (energy, curve) -> int, "
                              f"got {stability!r}")
         self.hook = stability if callable(stability) else None
         self.on = bool(stability)
         self.symmetry = symmetry
+        self.constraints = constraints
         self.k = k
         self.n_solves = 0
+        self.n_locate = 0
         self.values = []  # per point: {b: eigenvalues of sector b, decreasing}, or None
         self.incomplete = False
 
@@ -83,7 +85,7 @@ class _Stability:
         if not keeps_symmetry(curve, sym):
             # the branch broke its symmetry numerically: count without sectors
             sym = BlochSymmetry(1, curve.N)
-        rec, spec = count_unstable(energy, curve, sym, self.k)
+        rec, spec = count_unstable(energy, curve, sym, self.k, self.constraints)
         self.n_solves += 1
         self.incomplete |= not rec.complete
         self.values.append((sym, {b: np.sort(spec.eigenvalues[spec.sector == b])[::-1]
@@ -93,8 +95,10 @@ class _Stability:
     def eigenvalue(self, eq, sym, b, j):
         """The ``j``-th largest eigenvalue of sector ``b`` at ``eq``: ``(lambda, error, spec)``."""
         kk = None if self.k is None or sym.shift <= 400 else self.k
-        spec = sector_spectrum(eq.energy, eq.curve, sym, k=kk, sectors=[b])
+        spec = sector_spectrum(eq.energy, eq.curve, sym, k=kk, sectors=[b],
+                               constraints=self.constraints)
         self.n_solves += 1
+        self.n_locate += 1
         i = crossing_index(spec, b, j)
         if i is None:
             return None
@@ -203,7 +207,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     if sym.order > 1:  # re-polish in the fixed-point space
         again = newton_solve(prob.system, x0, tol, max(maxiter, 30), energy=energy_factory(p0))
         x0 = prob.project(np.append(again.x, p0))[:-1] if again.success else run.x
-    stab = _Stability(stability, sym)
+    stab = _Stability(stability, sym, cons)
     opts = dict(tol=tol, maxiter=maxiter, ptol=ptol, locate=locate, contact=stop_at_contact)
     if method == "natural":
         return _natural(energy_factory, prob, x0, vals, param, stab, opts)
@@ -278,7 +282,7 @@ def _natural(factory, prob, x, vals, param, stab, opts):
                 "point)")
     return Branch(param, tuple(points), (), bps, "natural", status >= 0, status, msg,
                   len(points) - 1, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves,
-                  factory, tuple(prob.constraints or ()))
+                  stab.n_locate, factory, tuple(prob.constraints or ()))
 
 
 # ------------------------------------------------------------------ pseudo-arclength
@@ -394,7 +398,7 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
         msg += f"; det F_x changes sign without a fold after point(s) {list(bps)}"
     return Branch(param, tuple(points), tuple(folds), bps, "pseudo-arclength", status >= 0,
                   status, msg, steps, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves,
-                  factory, tuple(prob.constraints or ()))
+                  stab.n_locate, factory, tuple(prob.constraints or ()))
 
 
 def touches_itself(curve: Curve, refine=4) -> bool:
