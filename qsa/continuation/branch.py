@@ -256,11 +256,14 @@ class Branch:
     success : bool
         Whether the requested range was covered (``status >= 0``).
     status : int
-        A key of :data:`MESSAGES`: 0 range covered, -1 step size below ``ds_min``
-        (corrector failures), -2 ``max_steps`` reached, -3 natural continuation
-        stopped (fold or failure), -4 singular tangent system.
+        A key of :data:`MESSAGES`: 0 range covered, 1 stopped at self-contact of the
+        curve, 2 stopped at a fold it cannot pass (step size below ``ds_min`` where
+        ``|dp/ds|`` is small), -1 step size below ``ds_min`` elsewhere (corrector
+        failures), -2 ``max_steps`` reached, -3 natural continuation stopped (fold or
+        failure), -4 singular tangent system, -5 numerical failure (an exception of a
+        solver, its text in the message).
     message : str
-        Starts with ``MESSAGES[status]``; then where it stopped, folds and sign changes.
+        Starts with ``MESSAGES[status]``; then where it stopped, folds and bifurcations.
     n_steps, n_rejected : int
         Accepted continuation steps and rejected (corrector-failed) attempts.
     n_newton : int
