@@ -1,10 +1,10 @@
-"""The spectrum of J on a faceting circle against its closed form.
+"""Circle spectrum against the closed form
+=========================================
 
-The closed form is in the Conventions and errata page, section 4.
-
-The circle of radius R is an equilibrium of ``Faceting(alpha, kstar) + Perimeter(beta,
+The spectrum of J on a faceting circle against its closed form (Conventions and errata,
+section 4). The circle of radius R is an equilibrium of ``Faceting(alpha, kstar) + Perimeter(beta,
 L*)`` for ``beta (2 pi R - L*) = W'(1/R)/R - W(1/R)``. For the normal mode ``cos k theta``
-the eigenvalue of J (normal gauge, self-adjoint in ``<f, h> = int f h dsigma``) is
+the eigenvalue of J (normal gauge, self-adjoint in ``<f, h> = int f h dsigma``) is ::
 
     lambda_k = -((k^2 - 1)^2 / R^4) (alpha^2 k^2 / R^2 + W''(1/R)) - delta_k0 2 pi beta / R,
 
@@ -16,14 +16,16 @@ double for k >= 2, zero for k = 1 (translations). This script measures
 * the fitted convergence order of ``FiniteDifference(N)`` on the low modes
   ``k = 0, 2..5`` (2: the paper's second-order stencils).
 
-Run: ``python examples/ex01_circle_spectrum.py``.
+Run: ``python examples/ex01_circle_spectrum.py [FIGURE.png]``.
 """
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
-from qsa import FiniteDifference, Fourier
+from qsa import FiniteDifference, Fourier, plotting
 from qsa.energies import DoubleWell
 from qsa.equilibria import circle
 from qsa.spectra import spectrum
@@ -82,6 +84,21 @@ def main():
     }
 
 
+def figure(out):
+    """Fourier and FD errors against N (log-log, with the slope of order 2)."""
+    fig, ax = plotting.new_figure(size=(5.5, 3.8))
+    ax.loglog(out["fd_sizes"], out["fd_max_rel_error"], "o-", label="FiniteDifference(N)")
+    ax.loglog(out["fourier_sizes"], out["fourier_max_rel_error"], "s-", label="Fourier(N)")
+    n = np.asarray(out["fd_sizes"], float)
+    ax.loglog(n, out["fd_max_rel_error"][0] * (n[0] / n) ** 2, ":", color="0.4",
+              label="slope -2")
+    ax.set_xlabel("N")
+    ax.set_ylabel("max relative eigenvalue error")
+    ax.set_title("faceting circle: J against the closed form")
+    ax.legend(fontsize="small")
+    return fig
+
+
 if __name__ == "__main__":
     out = main()
     print(f"circle R={R}, alpha={ALPHA}, kstar={KSTAR}, beta={BETA}: "
@@ -93,3 +110,6 @@ if __name__ == "__main__":
         print(f"{f'FD({N}) k=0,2..5':<22}{e:>16.2e}")
     print(f"FD fitted order: {out['fd_order']:.2f} (theory 2); unstable: "
           f"{out['fourier_n_unstable']}, kernel: {out['fourier_n_kernel']} (translations)")
+    fig = figure(out)
+    if len(sys.argv) > 1:
+        plotting.save(fig, sys.argv[1])

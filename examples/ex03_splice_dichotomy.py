@@ -1,4 +1,7 @@
-"""Spectral dichotomy of a heteroclinic splice: small eigenvalues ~ exp(-kstar d_min/(sqrt2 alpha)).
+"""Spectral dichotomy of a heteroclinic splice
+============================================
+
+The small eigenvalues of a splice shrink like ``exp(-kstar d_min / (sqrt(2) alpha))``.
 
 A splice (Conventions and errata, section 5) glues heteroclinic fronts into a rounded
 triangle: three corners of turning ``2 pi / 3`` (arcs of curvature ``kstar``, length
@@ -10,15 +13,17 @@ nearest fronts, ``~ exp(-kstar d_min / (sqrt(2) alpha))``, while the rest of the
 spectrum stays O(1). The script fits the slope of ``log max|lambda_small|`` against
 ``1/alpha`` and compares it with ``-kstar d_min / sqrt(2)``.
 
-Run: ``python examples/ex03_splice_dichotomy.py``.
+Run: ``python examples/ex03_splice_dichotomy.py [FIGURE.png]``.
 """
 
 from __future__ import annotations
 
+import sys
 import warnings
 
 import numpy as np
 
+from qsa import plotting
 from qsa.equilibria import splice_polygon
 from qsa.spectra import NotEquilibriumWarning, spectrum
 
@@ -53,6 +58,21 @@ def main():
             "predicted_slope": float(-KSTAR * rows[0]["d_min"] / np.sqrt(2))}
 
 
+def figure(out):
+    """``max |lambda_small|`` against ``1/alpha`` with the predicted exponential rate."""
+    fig, ax = plotting.new_figure(size=(5.5, 3.8))
+    inv = np.array([1.0 / r["alpha"] for r in out["rows"]])
+    small = np.array([r["max_small"] for r in out["rows"]])
+    ax.semilogy(inv, small, "o-", label=r"max $|\lambda|$ of the 5 small eigenvalues")
+    ax.semilogy(inv, small[0] * np.exp(out["predicted_slope"] * (inv - inv[0])), "--",
+                color="0.4", label=r"$\propto \exp(-\kappa_* d_{min} / (\sqrt{2}\alpha))$")
+    ax.set_xlabel(r"$1/\alpha$")
+    ax.set_ylabel(r"$|\lambda|$")
+    ax.set_title("splice triangle: slow eigenvalues")
+    ax.legend(fontsize="small")
+    return fig
+
+
 if __name__ == "__main__":
     out = main()
     print("splice triangle, corners 120 deg, facets ~ (1, 1.3, 1), kstar=5")
@@ -64,3 +84,6 @@ if __name__ == "__main__":
               f"{r['max_small'] / r['prediction']:>10.3g}{r['first_fast']:>10.2f}")
     print(f"slope of log|lambda_small| vs 1/alpha: {out['slope']:.3f} "
           f"(predicted -kstar d_min/sqrt2 = {out['predicted_slope']:.3f})")
+    fig = figure(out)
+    if len(sys.argv) > 1:
+        plotting.save(fig, sys.argv[1])

@@ -329,14 +329,14 @@ class ReducedHessian:
 
         With invertible diagonal ``Lf = diag(l)``, ``Rf = diag(r)`` (the energies'
         case) the unknowns are ``[r x, y, mu]`` (sizes p, m, m), the right-hand side
-        ``[b / l, 0, 0]`` and the matrix
+        ``[b / l, 0, 0]`` and the matrix ::
 
             [[diag(1/l) (S0 - sigma B) diag(1/r) + Luu, Lyu^T, cU^T],
              [Lyu, Lyy, cY^T],
              [cU, cY, 0]];
 
         eliminating ``mu`` and ``y = Z (r x)`` leaves ``diag(1/l) (H - sigma B - U V^T) x``.
-        Otherwise the unknowns are ``[x, u, y, mu, v]`` (sizes n, p, m, m, p) and the rows
+        Otherwise the unknowns are ``[x, u, y, mu, v]`` (sizes n, p, m, m, p) and the rows ::
 
             (S0 - sigma B) x + Lf v = b,       Rf x - u = 0,
             Luu u + Lyu^T y + cU^T mu - v = 0, Lyu u + Lyy y + cY^T mu = 0,

@@ -223,6 +223,7 @@ class SerialExecutor(cf.Executor):
     """Runs each task at submission, in the calling process (``workers=1``, debugging)."""
 
     def submit(self, fn, /, *args, **kwargs):
+        """Run ``fn(*args, **kwargs)`` now; a finished ``Future`` holds its result or error."""
         fut = cf.Future()
         try:
             fut.set_result(fn(*args, **kwargs))

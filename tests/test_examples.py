@@ -16,6 +16,14 @@ def load(name):
     return mod
 
 
+def assert_figure(fig, lines):
+    """The example's figure (shown by the documentation's gallery) draws and is labelled."""
+    (ax,) = fig.axes
+    assert len(ax.get_lines()) == lines
+    assert ax.get_xlabel() and ax.get_ylabel()
+    fig.canvas.draw()
+
+
 def test_examples_listed_in_readme():
     readme = (EXAMPLES / "README.md").read_text()
     scripts = sorted(p.stem for p in EXAMPLES.glob("ex[0-9][0-9]_*.py"))
@@ -34,10 +42,12 @@ def test_ex01_circle_spectrum():
     assert out["fourier_n_unstable"] == 0 and out["fourier_n_kernel"] == 2
     assert out["fd_order"] == pytest.approx(2.0, abs=0.2)
     assert out["fd_max_rel_error"][-1] < 0.02
+    assert_figure(mod.figure(out), lines=3)
 
 
 def test_ex02_npulse_family():
-    out = load("ex02_npulse_family").main()
+    mod = load("ex02_npulse_family")
+    out = mod.main()
     rows = out["rows"]
     assert [r["n_pulses"] for r in rows] == [2, 3, 4, 5, 6]
     assert all(r["success"] for r in rows)
@@ -49,10 +59,12 @@ def test_ex02_npulse_family():
     # the 2-pulse is stable; each further pulse adds two coarsening directions
     assert [r["n_unstable"] for r in rows] == [0, 2, 4, 6, 8]
     assert all(r["n_kernel"] == 3 for r in rows)
+    assert_figure(mod.figure(out), lines=2)
 
 
 def test_ex03_splice_dichotomy():
-    out = load("ex03_splice_dichotomy").main()
+    mod = load("ex03_splice_dichotomy")
+    out = mod.main()
     rows = out["rows"]
     assert all(r["success"] for r in rows)
     # 3 corners = 6 fronts: 2 * 3 - 1 small eigenvalues, separated from the O(1) rest
@@ -65,3 +77,4 @@ def test_ex03_splice_dichotomy():
     assert out["slope"] == pytest.approx(out["predicted_slope"], rel=0.1)
     ratios = [r["max_small"] / r["prediction"] for r in rows]
     assert max(ratios) / min(ratios) < 2
+    assert_figure(mod.figure(out), lines=2)

@@ -5,6 +5,7 @@ Examples
 ``qsa flow cha --N 100 --t-final 0.2 --tol 1e-4 --out run-cha``  (the appendix example)
 ``qsa flow facet --alpha 0.1 --kstar 5 --beta 5 --L-star 8 --shape wobbly --lobes 9 --N 600``
 ``qsa flow cha --resume run-cha/checkpoint.npz --t-final 0.4``
+``qsa flow facet --shape wobbly --lobes 7 --N 200 --t-final 0.02 --movie facet.gif``
 """
 
 from __future__ import annotations
@@ -51,7 +52,8 @@ def _common(q, t_final):
     q.add_argument("--tol", type=float, default=1e-4, help="local error tolerance (1e-4)")
     q.add_argument("--method", choices=["be", "bdf2"], default="be",
                    help="backward Euler with step doubling (paper) or BDF2")
-    q.add_argument("--snapshots", type=int, default=6, help="snapshots saved (default 6)")
+    q.add_argument("--snapshots", type=int, default=None,
+                   help="snapshots saved (default 6; 60 with --movie)")
     q.add_argument("--out", default=None, help="folder for result.npz, summary.json, flow.png")
     q.add_argument("--checkpoint", default=None,
                    help="checkpoint file (default OUT/checkpoint.npz when --out is given)")
@@ -59,6 +61,10 @@ def _common(q, t_final):
     q.add_argument("--no-progress", action="store_true", help="no progress bar")
     q.add_argument("--json", action="store_true", help="JSON summary on stdout")
     q.add_argument("--plot", metavar="FILE", help="write the figure to FILE")
+    q.add_argument("--movie", metavar="FILE",
+                   help="write an animation of the snapshots to FILE.gif (Pillow) or "
+                        "FILE.mp4 (needs ffmpeg)")
+    q.add_argument("--fps", type=float, default=10.0, help="movie frames per second (10)")
     q.set_defaults(func=run)
 
 
@@ -104,6 +110,15 @@ def summarize(res):
 def run(args):
     from qsa.flows import solve_flow
 
+    if args.movie:  # refuse a movie that cannot be written before running the flow
+        from qsa.plotting import movie_writer
+
+        movie_writer(args.movie)
+        if not args.fps > 0:
+            raise ValueError(f"--fps must be positive, got {args.fps:g}")
+    snapshots = args.snapshots if args.snapshots is not None else (60 if args.movie else 6)
+    if snapshots < 2:
+        raise ValueError(f"--snapshots must be at least 2, got {snapshots}")
     xy = initial_curve(args)
     model = build_model(args, xy)
     checkpoint = args.checkpoint
@@ -111,7 +126,7 @@ def run(args):
         os.makedirs(args.out, exist_ok=True)
         if checkpoint is None:
             checkpoint = os.path.join(args.out, "checkpoint.npz")
-    t_eval = np.linspace(0.0, args.t_final, max(args.snapshots, 2))
+    t_eval = np.linspace(0.0, args.t_final, snapshots)
     res = solve_flow(model, None if args.resume else xy, args.t_final, N=args.N, tol=args.tol,
                      method=args.method, t_eval=t_eval, checkpoint=checkpoint,
                      resume=args.resume, progress=False if args.no_progress else None)
@@ -132,6 +147,11 @@ def run(args):
 
         save(plot_flow(res, title=f"{res.system.metadata()['model']}, N = {res.N}"), figure)
         summary["figure"] = figure
+    if args.movie:
+        from qsa.plotting import animate_flow
+
+        animate_flow(res, args.movie, fps=args.fps)
+        summary["movie"] = args.movie
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
@@ -142,4 +162,6 @@ def run(args):
               f" -> {summary['energy_final']:.6g}")
         if args.out:
             print(f"data and figure written to {args.out}/")
+        if args.movie:
+            print(f"movie ({len(res.t)} frames) written to {args.movie}")
     return 0 if res.success else 1

@@ -58,8 +58,7 @@ def run(args):
         from qsa import plotting
 
         if args.mode is None:
-            fig = plotting.new_figure(size=(6.0, 4.0))[0]
-            plotting.plot_spectrum(spec, fig.axes[0])
+            fig = plotting.plot_spectrum(spec).figure  # all eigenvalues | those near 0
         else:
             fig = plotting.plot_eigenmode(spec, eq.curve, args.mode)
         plotting.save(fig, args.plot)

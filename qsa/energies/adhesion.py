@@ -1,15 +1,15 @@
 """The adhesion-repulsion two-point kernel and its discrete fields (kernel level).
 
-The two-point energy of the paper (e:AdhE) is
+The two-point energy of the paper (e:AdhE) is ::
 
     E_A = int_S int_S A(|d(s, s~)|^2) dsigma_s dsigma_s~,   d = gamma(s) - gamma(s~),
 
-with the Lennard-Jones type kernel (e:LJ)
+with the Lennard-Jones type kernel (e:LJ) ::
 
     A(l) = A0 (1 - l / (a^2 l*^2)) exp(-l / l*^2),   l = |d|^2.
 
 Its L^2(dsigma) extrinsic gradient is (A.n + kappa B, 0) (e:Adh-Ex_grad) with the
-two-point force and the surface density
+two-point force and the surface density ::
 
     A(s) = 4 int A'(|d|^2) d dsigma_s~,     B(s) = 2 int A(|d|^2) dsigma_s~,
 
@@ -24,7 +24,7 @@ derivatives with respect to the node positions. Everything is vectorised over
 pairs; with a neighbour list the cost is O(N + number of pairs).
 
 The discrete energy (the quadrature of the paper's code, trapezoid in both
-variables, the diagonal ``i = j`` included) is
+variables, the diagonal ``i = j`` included) is ::
 
     E_A = sum_i sum_j A(|X_i - X_j|^2) w_i w_j,
 
@@ -558,7 +558,7 @@ def uniform_weight_fields(kernel, x, y, w, i, j):
 
 def adhesion_normal_velocity(kernel, x, y, nx, ny, kappa, w, *, pairs=None,
                              method="neighbours"):
-    """Two-point normal velocity ``V^n_A = -(force . n + kappa B)`` (e:Adh-NV).
+    """Two-point normal velocity ``V^n_A = -(force.n + kappa B)`` (e:Adh-NV).
 
     ``(force . n + kappa B, 0)`` is the extrinsic L^2(dsigma) gradient
     (e:Adh-Ex_grad); rigid invariance makes it orthogonal to the rigid normal
@@ -632,7 +632,7 @@ def adhesion_pair_derivatives(kernel, x, y, *, pairs=None, method="neighbours"):
     """Pair terms of the derivatives of ``B`` and ``force`` with respect to positions.
 
     For a directed pair ``(p, q)``, ``p != q``, ``d = X_p - X_q``, ``l = |d|^2``
-    and weights held fixed:
+    and weights held fixed: ::
 
         dB_p/dX_q     = -4 w_q A'(l) d,
         dforce_p/dX_q = -4 w_q H,     H = 2 A''(l) d d^T + A'(l) I,

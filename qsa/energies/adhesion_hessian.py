@@ -2,7 +2,7 @@
 
 The discrete adhesion energy (:func:`~qsa.energies.adhesion.adhesion_energy`) is a
 function of the intrinsic unknowns ``U = (kappa, g)`` through the node positions
-and the quadrature weights:
+and the quadrature weights::
 
     E_A(U) = E^(X, w) = A0 sum_i w_i^2 + 2 sum_{pairs i<j} A(|X_i - X_j|^2) w_i w_j,
     theta = theta0 + C(g kappa),  X = gamma0 + C(g tau),  tau = (cos theta, sin theta),
@@ -17,7 +17,7 @@ with respect to ``<f, h> = sum f h dsigma``, ``dsigma = omega g``.
 First derivatives (reverse sweep)
 ---------------------------------
 With ``F = dE^/dX = w force`` and ``dE^/dw = B`` (the fields of
-:func:`~qsa.energies.adhesion.adhesion_fields`) and ``tau' = (-sin theta, cos theta)``:
+:func:`~qsa.energies.adhesion.adhesion_fields`) and ``tau' = (-sin theta, cos theta)``: ::
 
     P = C^T F,   a = P . tau,   p = P . tau',   beta = C^T (g p),
     dE/dkappa = g beta,   dE/dg = a + kappa beta + omega B,
@@ -30,7 +30,7 @@ angle ``theta(0)`` are held fixed, so the energy is defined off the closed curve
 
 Second derivatives (forward over reverse)
 -----------------------------------------
-Along ``V = (kappa1, g1)``:
+Along ``V = (kappa1, g1)``: ::
 
     theta1 = C(g kappa1 + kappa g1),   X1 = C(g1 tau + g theta1 tau'),   w1 = omega g1,
     (F1, B1) = K (X1, w1),
@@ -39,7 +39,7 @@ Along ``V = (kappa1, g1)``:
     (H V)_kappa = g1 beta + g beta1,   (H V)_g = a1 + kappa1 beta + kappa beta1 + omega B1,
 
 where ``K`` is the Hessian of ``E^`` in ``(x, y, w)``: one stencil per pair, with
-``d = X_i - X_j``, ``l = |d|^2``, ``H_ij = 2 A''(l) d d^T + A'(l) I``,
+``d = X_i - X_j``, ``l = |d|^2``, ``H_ij = 2 A''(l) d d^T + A'(l) I``, ::
 
     d2E^/dX_i dX_j = -4 w_i w_j H_ij,   d2E^/dX_i dw_j = 4 A'(l) d w_i,
     d2E^/dw_i dw_j = 2 A(l),   (i != j),
@@ -59,13 +59,13 @@ Representations
 * ``"reduced"`` (finite differences): the trapezoid rule is ``C = Bd^{-1} R`` with
   ``Bd`` the lower bidiagonal difference (``(Bd z)_0 = z_0``) and ``R`` the
   trapezoid average (``(R f)_0 = 0``), both sparse. The state ``Y = (theta, x, y)``
-  solves the sparse lower-triangular equations
+  solves the sparse lower-triangular equations ::
 
       Bd theta = R(g kappa) + theta0 e_0,   Bd x = R(g cos theta) + x0 e_0,
       Bd y = R(g sin theta) + y0 e_0,
 
   and ``H`` is the :class:`~qsa.linalg.ReducedHessian` of ``E^`` under them, with the
-  Lagrangian's second derivatives
+  Lagrangian's second derivatives ::
 
       L_UU = [[0, beta], [beta, omega K_ww omega]],   L_YU = [[0, p], [0, K_Xw omega]],
       L_YY = diag(-g a, K_XX),

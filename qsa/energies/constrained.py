@@ -148,7 +148,7 @@ def residual_floor(energy, curve: Curve, probes=2, seed=0) -> float:
 
 
 def multipliers(energy, curve: Curve, gradient=None, constraints=None) -> np.ndarray:
-    """Lagrange multipliers of ``nabla_I E = Lambda . Psi + sum_c mu_c nabla_I c`` (e:Abs-CP).
+    """Lagrange multipliers of ``nabla_I E = Lambda.Psi + sum_c mu_c nabla_I c`` (e:Abs-CP).
 
     The least-squares projection of ``nabla_I E`` onto ``span Psi`` (and the gradients of
     the extra constraints) in ``<f, h> = int f h dsigma``: ``G Lambda = b`` with the Gram

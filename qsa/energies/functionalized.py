@@ -1,6 +1,6 @@
 """The functionalized curvature energy: a second-order model built on the faceting well (e:LIE).
 
-``FunctionalizedCurvature(alpha, eta, kstar)`` is
+``FunctionalizedCurvature(alpha, eta, kstar)`` is ::
 
     E_FC = int 1/2 Z^2 - eta (alpha^2/2 |nabla_s kappa|^2 + W(kappa)) dsigma,
     Z = alpha^2 Delta_s kappa - W'(kappa),
@@ -13,7 +13,7 @@ needs the second-order class: ``F`` depends on ``Delta_s kappa``.
 Gradient and normal velocity
 ----------------------------
 With ``F_q = alpha^2 Z``, ``F_p = -eta alpha^2 nabla_s kappa``, ``F_k = -W'' Z - eta W'``
-in e:first_var,
+in e:first_var, ::
 
     mu := d_kappa E = (alpha^2 Delta_s - W''(kappa) + eta) Z,
     g d_g E = Z^2/2 - alpha^2 Z Delta_s kappa + alpha^2 nabla_s Z nabla_s kappa
@@ -37,7 +37,7 @@ At ``kappa0 = 1/R`` (second-order module docstring, "The circle") the tension is
 (``W = W' = 0``), so the circle of radius ``1/kstar`` is a critical circle of E_FC for
 every ``alpha`` and ``eta``. With ``F_qq = alpha^4``, ``F_pp = -eta alpha^2``,
 ``F_qk = -alpha^2 W''`` and ``F_kk = W''^2 + W' W''' - eta W''`` the spectrum of ``J``
-factors into the faceting symbol ``Lambda_k = alpha^2 k^2 / R^2 + W''(kappa0)``:
+factors into the faceting symbol ``Lambda_k = alpha^2 k^2 / R^2 + W''(kappa0)``: ::
 
     lambda_k = -((k^2 - 1)^2 / R^4) (Lambda_k (Lambda_k - eta) + W'(kappa0) W'''(kappa0))
                - delta_k0 2 pi beta / R,

@@ -14,7 +14,7 @@ grid's *edges* or on its *nodes*:
 The faceting energy puts ``alpha^2/2 |nabla_s kappa|^2`` on edges and ``W(kappa)``
 on nodes; Canham-Helfrich puts ``eps/2 kappa^2`` on nodes. With the linear maps
 ``q = E kappa``, ``k_e = A kappa``, ``g_e = A g`` and ``Phi(g_e, q, k_e) =
-g_e f(q/g_e, k_e)``, the exact derivatives of the discrete energy are
+g_e f(q/g_e, k_e)``, the exact derivatives of the discrete energy are ::
 
     dE/dkappa = E^T (w f_p) + A^T (w g_e f_k),   dE/dg = A^T (w (f - p f_p)),
 

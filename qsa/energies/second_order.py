@@ -4,7 +4,7 @@ Discretization
 --------------
 With the grid's edge difference ``E`` (nodes -> edges), edge average ``A`` (for
 finite differences the midpoints; for Fourier the edges are the nodes and
-``A = I``) and quadrature weights ``w``,
+``A = I``) and quadrature weights ``w``, ::
 
     g_e = A g,    p = (E kappa) / g_e     (edges: nabla_s kappa, as in local.py),
     q = -(E^T p) / g                      (nodes: Delta_s kappa),
@@ -25,7 +25,7 @@ Gradient
 --------
 Reverse mode through the two nonlinear maps ``p(kappa, g)`` and ``q(p, g)``.
 With ``a_gamma = w F``, ``a_Q = w gamma F_q``, ``a_P = w gamma F_p``,
-``a_K = w gamma F_k`` (at the evaluation points),
+``a_K = w gamma F_k`` (at the evaluation points), ::
 
     c_q = (L_Q^T a_Q) / g,            c_p = (L_P^T a_P - E c_q) / g_e,
     dE/dkappa = L_K^T a_K + E^T c_p,
@@ -33,7 +33,7 @@ With ``a_gamma = w F``, ``a_Q = w gamma F_q``, ``a_P = w gamma F_p``,
 
 exactly (Euclidean gradient); the ``<f, h> = int f h dsigma`` gradient divides
 both rows by ``dsigma = w g``. In the continuum (``A = I``, ``E = d/ds``) this is
-e:first_var:
+e:first_var: ::
 
     d_kappa E = Delta_s F_q - nabla_s F_p + F_k,
     g d_g E   = F - F_q Delta_s kappa + nabla_s F_q nabla_s kappa - F_p nabla_s kappa,
@@ -49,7 +49,7 @@ The first variations ``dp = J_p U1 = (E kappa1 - p A g1) / g_e`` and
 ``dq = J_q U1 = -(E^T dp + q g1) / g`` (the kappa block of ``J_q`` is
 ``laplace_s``); along straight lines ``U + delta U1`` the second variations are
 ``d^2 p = -2 (A g1 / g_e) dp`` and ``d^2 q = -(E^T d^2 p + 2 g1 dq) / g``. Hence
-the exact Euclidean Hessian
+the exact Euclidean Hessian ::
 
     H = T^T B T - (X_p + X_p^T) - (X_q + X_q^T),
     X_p = R_e^T diag(c_p) J_p,    X_q = R^T diag(c_q) J_q,
@@ -71,13 +71,13 @@ On a circle of radius ``R`` (``kappa0 = 1/R``, ``q = p = 0``) ``mu0 = d_kappa E 
 L*)`` iff ``beta (2 pi R - L*) = kappa0 F_k - F`` (:meth:`SecondOrderEnergy.circle_tension`),
 and a critical circle of ``E`` alone iff that tension is 0. Linearise ``V^n`` along a
 normal displacement ``phi`` (``kappa1 = G phi``, ``g1 = g kappa0 phi``): e:W-invar gives
-``delta xi = mu0 kappa1`` for zero-mean modes, so ``delta V^n = -G delta mu`` with
+``delta xi = mu0 kappa1`` for zero-mean modes, so ``delta V^n = -G delta mu`` with ::
 
     delta mu = F_qq Delta_s^2 kappa1 + (2 F_qk - F_pp) Delta_s kappa1 + F_kk kappa1
 
 (``F_qp`` and ``F_pk`` cancel between ``Delta_s nabla_s`` and ``nabla_s Delta_s``). With
 ``Delta_s cos(k theta) = -(k/R)^2 cos(k theta)`` the normal-velocity linearization ``J``
-has the eigenvalues (:func:`circle_eigenvalues`)
+has the eigenvalues (:func:`circle_eigenvalues`) ::
 
     lambda_k = -((k^2 - 1)^2 / R^4) (F_qq m^2 + (F_pp - 2 F_qk) m + F_kk) - delta_k0 2 pi beta / R,
     m = k^2 / R^2,

@@ -4,12 +4,12 @@ The front ``psi_h`` solves ``alpha^2 psi'' = W'(psi)`` on the line (``sigma`` is
 length, ``' = d/dsigma``; e:Facet-CP with ``nu1 = 0``) and connects the wells,
 ``psi_h(-inf) = 0``, ``psi_h(+inf) = kstar``; it is centred so that
 ``psi_h(0) = kstar / 2``. Its first integral ``alpha^2 psi'^2 / 2 = W(psi)``
-(e:Fint with ``nu1 = nu2 = 0``) gives
+(e:Fint with ``nu1 = nu2 = 0``) gives ::
 
     sigma(psi) = int_{kstar/2}^{psi} alpha / sqrt(2 W(p)) dp.
 
 For the quartic ``W = k^2 (k - kstar)^2 / 4`` this is the closed form (Conventions and errata,
-section 5)
+section 5) ::
 
     psi_h(sigma) = kstar / (1 + exp(-kstar sigma / (sqrt(2) alpha))),
 

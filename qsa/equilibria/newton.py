@@ -34,7 +34,7 @@ Jacobian
 --------
 Exact derivatives of the *discrete* residual (verified against central
 differences in the tests). With ``mu = d_kappa E``, ``xi = g d_g E`` (``nabla_I E``
-in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``,
+in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``, ::
 
     V^n = (Delta_s + kappa^2) mu - kappa xi,
     dV^n/dkappa = (Delta_s + kappa^2) H_kk + diag(2 kappa mu - xi) - diag(kappa g) H_gk,
@@ -96,8 +96,10 @@ STATUS_MESSAGES = MESSAGES
 class PolishResult(Equilibrium):
     """An :class:`Equilibrium` from :func:`polish`, with the Newton record.
 
-    Attributes (besides those of :class:`Equilibrium`)
-    --------------------------------------------------
+    Besides the attributes of :class:`Equilibrium`:
+
+    Attributes
+    ----------
     status : int
         A key of :data:`MESSAGES`: 0 converged to ``tol``, 1 converged to the round-off
         floor, -1 ``maxiter`` reached, -2 singular system, -3 line search failed.
@@ -359,24 +361,35 @@ class EquilibriumSystem:
         r = self._constraint_rows()
         return F[r:r + self.m] / np.array([abs(con.target) for con in self.constraints])
 
-    def merit(self, F, c: Curve, scale: float) -> float:
-        """Smooth line-search merit: the 2-norm of the scaled residual (RMS over the V rows).
+    def step_norm(self, dx, x, scale: float) -> float:
+        """Size of a change ``dx`` of the unknowns ``x``: a scaled RMS norm in state space.
+
+        ``kappa`` is measured against ``max(max|kappa|, 2 pi / L)``, ``L`` against ``L``,
+        the unfolding parameters against the residual scale (they have the units of
+        ``V^n``) and a constraint multiplier ``mu_i`` against the residual scale over
+        ``max|n_i|``. The Newton line search compares Newton corrections in this norm
+        (the natural monotonicity test of :func:`newton_solve`).
 
         Parameters
         ----------
-        F, c, scale
-            As in :meth:`scaled_parts`.
+        dx, x : ndarray, shape (size,)
+        scale : float
+            :func:`residual_scale` at ``x``.
 
         Returns
         -------
         float
         """
         N = self.N
-        m = np.mean((F[:N] / scale) ** 2) + np.sum((F[N:N + 3] / c.length()) ** 2)
-        if self.phase is not None:
-            m += (F[N + 3] / max(np.max(np.abs(c.kappa)), 1.0)) ** 2
+        L = abs(x[N])
+        k_scale = max(float(np.max(np.abs(x[:N]))), 2 * np.pi / L)
+        m = np.mean((dx[:N] / k_scale) ** 2) + (dx[N] / L) ** 2
+        m += np.sum((self.unfolding(dx) / scale) ** 2)
         if self.m:
-            m += np.sum(self._scaled_defects(F) ** 2)
+            c = self.curve(x)
+            n_size = np.array([np.max(np.abs(con.normal_variation(c)))
+                               for con in self.constraints])
+            m += np.sum((self.constraint_multipliers(dx) * n_size / scale) ** 2)
         return float(np.sqrt(m))
 
     def scaled_norm(self, F, c: Curve, scale: float) -> float:
@@ -611,10 +624,22 @@ class NewtonRun:
 def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=True) -> NewtonRun:
     """Damped Newton on ``system.residual`` from ``x0``.
 
-    The full step is taken whenever it decreases the merit :meth:`EquilibriumSystem.merit`
-    (a smooth 2-norm, for which the Newton direction is a descent direction);
-    otherwise the step is halved (at most 10 times). Never raises for non-convergence:
-    the best state is returned with a status code (a key of :data:`MESSAGES`).
+    Step control (``line_search=True``): a trial step ``x + t dx`` (``t = 1, 1/2, ...``,
+    at most 10 halvings) is accepted when the relative residual decreases, or when it
+    passes the *natural monotonicity test*
+
+        ||J(x)^{-1} F(x + t dx)|| <= (1 - t/4) ||dx||
+
+    in the state norm :meth:`EquilibriumSystem.step_norm` (one more solve with the
+    factorization of ``J(x)``). The residual itself is a poor merit for the
+    equilibrium equations: ``V^n`` is a differential operator of order 4 (faceting)
+    or 6 (second-order energies) in ``kappa``, so the quadratic error of a good
+    Newton step, being rough, can raise ``max|V^n|`` a hundredfold although the state
+    moved towards the solution. The natural test measures the residual in the norm of
+    the Newton corrections instead (it is invariant under any rescaling of the
+    equations), so full steps are taken wherever Newton converges. Never raises for
+    non-convergence: the best state (smallest relative residual, never worse than
+    ``x0``) is returned with a status code (a key of :data:`MESSAGES`).
 
     Parameters
     ----------
@@ -635,7 +660,6 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
     scale = residual_scale(system.energy if energy is None else energy, system.curve(x))
     F = system.residual(x, energy)
     r = system.scaled_norm(F, system.curve(x), scale)
-    m = system.merit(F, system.curve(x), scale)
     history = [r]
     best = (r, x.copy())
     status = -1
@@ -664,6 +688,7 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
         if not np.all(np.isfinite(dx)):
             status = -2
             break
+        size = system.step_norm(dx, x, scale)
         t = 1.0
         accepted = False
         for _ in range(11 if line_search else 1):
@@ -671,12 +696,11 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
             if xt[system.N] > 0:
                 try:
                     Ft = system.residual(xt, energy)
-                    ct = system.curve(xt)
-                    rt = system.scaled_norm(Ft, ct, scale)
-                    mt = system.merit(Ft, ct, scale)
+                    rt = system.scaled_norm(Ft, system.curve(xt), scale)
                 except ValueError:
-                    rt = mt = np.inf
-                if np.isfinite(rt) and (mt < (1 - 1e-4 * t) * m or rt < r or not line_search):
+                    rt = np.inf
+                if np.isfinite(rt) and (not line_search or rt < r
+                                        or _natural_test(system, fac, Ft, x, scale, size, t)):
                     accepted = True
                     break
             t *= 0.5
@@ -686,7 +710,7 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
             floor = _noise_floor(system, x, scale, energy)
             status = 1 if _at_floor(system, x, F, scale, tol, floor) else -3
             break
-        x, F, r, m = xt, Ft, rt, mt
+        x, F, r = xt, Ft, rt
         history.append(r)
         if r < best[0]:
             best = (r, x.copy())
@@ -701,6 +725,16 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
     if floor is None:
         floor = _noise_floor(system, x, scale, energy)
     return NewtonRun(x, status, np.array(history), n_newton, n_lu, float(np.max(floor)))
+
+
+def _natural_test(system, fac, Ft, x, scale, size, t) -> bool:
+    """``||J(x)^{-1} F(x + t dx)|| <= (1 - t/4) ||dx||`` (restricted monotonicity test)."""
+    try:
+        dxbar = fac.solve(Ft)
+    except (RuntimeError, ValueError):
+        return False
+    return bool(np.all(np.isfinite(dxbar))
+                and system.step_norm(dxbar, x, scale) <= (1 - t / 4) * size)
 
 
 def _params(energy, curve, Lambda, constraints=(), mu=()):
@@ -736,7 +770,9 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
     maxiter : int
         Maximum number of Newton steps.
     line_search : bool
-        Halve the step until the residual decreases (default True).
+        Damp the Newton step (default True): halve it until the relative residual
+        decreases or the natural monotonicity test in state space passes (see
+        :func:`newton_solve`); full steps are taken wherever Newton converges.
     constraints : sequence of Constraint, optional
         Exact constraints besides closure, e.g. ``[FixedLength(), FixedArea()]``
         (:mod:`qsa.constraints`; a ``None`` target is the value of ``curve``). The

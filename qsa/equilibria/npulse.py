@@ -10,7 +10,7 @@ periodic orbit (:mod:`qsa.equilibria.orbit`) whose pulse turns the tangent by
 rotated by ``2 pi / N`` from the previous. Its length is ``L = N T`` (T the period).
 
 On such a state ``d_kappa E = -nu1`` and ``g d_g E = -(nu1 psi + nu2) + beta (L - L*)``,
-so (Conventions and errata, section 5)
+so (Conventions and errata, section 5) ::
 
     V^n = -G(-nu1) - psi (-(nu1 psi + nu2) + beta (L - L*)) = psi (nu2 - beta (L - L*)),
 
@@ -30,7 +30,7 @@ well of P whose level is reached first. For ``nu1 = 0`` and a symmetric well
 (``W(k) = W(kstar - k)``) the orbit is symmetric about ``c = kstar/2``, so
 ``Theta = kstar T / 2`` increases from ``Theta_0 = pi alpha kstar / sqrt(-W''(kstar/2))``
 to infinity and an N-pulse exists iff ``N Theta_0 < 2 pi``, i.e.
-``N alpha kstar < 2 sqrt(-W''(kstar/2))``. For the quartic ``W''(kstar/2) = -kstar^2/4``:
+``N alpha kstar < 2 sqrt(-W''(kstar/2))``. For the quartic ``W''(kstar/2) = -kstar^2/4``: ::
 
     N alpha < 1.
 

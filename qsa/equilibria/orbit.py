@@ -1,6 +1,6 @@
 """Periodic orbits of the faceting equilibrium equation (phase-plane construction).
 
-Equilibria with constant arc length solve (e:Facet-CP, ``' = d/dsigma``)
+Equilibria with constant arc length solve (e:Facet-CP, ``' = d/dsigma``) ::
 
     alpha^2 psi'' - W'(psi) = nu1,
 
@@ -17,7 +17,7 @@ Period and curvature per pulse
 ------------------------------
 With ``psi = m + h tanh v`` (``m = (a+b)/2``, ``h = (b-a)/2``; i.e. ``psi = m + h sin u``
 with ``u = gd(v)``, Conventions and errata, section 5) the turning-point singularities disappear:
-``P = (psi - a)(b - psi) R(psi)`` with ``R > 0`` on ``[a, b]`` and
+``P = (psi - a)(b - psi) R(psi)`` with ``R > 0`` on ``[a, b]`` and ::
 
     dsigma/dv = alpha sech(v) / sqrt(2 R),
 

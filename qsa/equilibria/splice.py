@@ -3,7 +3,7 @@
 Section "Formal Equilibrium and Quasi-Steady Analysis" (e:psi_h and the 2N-front
 quasi-equilibrium ``psi_N``). With constant arc length ``g = L`` and arc length
 ``sigma = L s``, corner ``i`` is the arc ``[p_{2i-1}, p_{2i}]`` between an up-front and a
-down-front; the curvature is
+down-front; the curvature is ::
 
     psi_N(sigma) = sum_i [ psi~(y_i + a_i) - psi~(y_i - a_i) ],
 
@@ -24,7 +24,7 @@ Constraints and free parameters: the total turning ``kstar sum (p_{2i} - p_{2i-1
 positions; a common shift of all positions only moves the base point, so
 ``2N - 4`` parameters are free. :func:`splice` moves the positions by minimum-norm
 Gauss-Newton steps until ``|C| <= tol`` and returns a basis of the free directions.
-Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term):
+Residuals (paper's ``R_kappa``, ``R_g``; ``L* = L`` balances the perimeter term): ::
 
     R_kappa = -alpha^2 psi_N'' + W'(psi_N),   R_g = -alpha^2/2 psi_N'^2 + W(psi_N).
 """

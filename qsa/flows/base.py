@@ -3,7 +3,7 @@
 A *model* is a frozen dataclass of physical parameters (``CHA``,
 ``FacetingFlow``). ``model.setup(x, y)`` binds it to initial node positions
 (already resampled to equal chords, the paper's ap:scaled) and returns a
-:class:`DAESystem`: the implicit differential-algebraic system
+:class:`DAESystem`: the implicit differential-algebraic system ::
 
     F(y, ydot) = 0,
 
@@ -11,7 +11,7 @@ on the stacked unknowns ``y`` (per node: positions, curvature, auxiliary
 fields, normal velocity; plus the length L). ``ydot`` enters F linearly and only
 in the rows of the normal-motion law and the tangential gauge, so one implicit
 step of any BDF/SDIRK-type method with ``ydot = (y - psi) / (gamma k)`` is the
-nonlinear system
+nonlinear system ::
 
     G(y) = F(y, (y - psi) * c) = 0,   c = 1 / (gamma k),
 

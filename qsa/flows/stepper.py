@@ -1,6 +1,6 @@
 """Implicit time steppers for the DAE curve flows (appendix "Discussion of Numerical Scheme").
 
-Every implicit stage of the methods here is the nonlinear system
+Every implicit stage of the methods here is the nonlinear system ::
 
     G(y) = F(y, (y - psi) c) = 0,    dG/dy = dF/dy + c dF/dydot,
 

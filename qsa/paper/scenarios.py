@@ -43,7 +43,7 @@ _FINE = 8
 
 
 def perturbed_circle_radius(R, noise, modes, seed):
-    """``r(theta) = R (1 + noise sum_k cos(k theta + phi_k))``, ``k = modes[0] .. modes[1]``.
+    """``r(theta) = R (1 + noise sum_k cos(k theta + phi_k))`` for ``modes[0] <= k <= modes[1]``.
 
     Every mode has the same amplitude ``noise``; the phases ``phi_k`` are
     uniform on ``[0, 2 pi)``, drawn in order of ``k`` from

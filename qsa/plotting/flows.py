@@ -6,7 +6,7 @@ import numpy as np
 
 from qsa.plotting._core import figure_pair, new_figure
 
-__all__ = ["plot_flow", "plot_energy_history", "plot_convergence", "plot_timesteps"]
+__all__ = ["plot_flow", "plot_energy_and_length", "plot_convergence", "plot_timesteps"]
 
 
 def plot_flow(result, axes=None, max_curves=6, title=None):
@@ -37,14 +37,17 @@ def plot_flow(result, axes=None, max_curves=6, title=None):
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.legend(fontsize="small", loc="best")
-    plot_energy_history(result, axes[1])
+    plot_energy_and_length(result, axes[1])
     if title:
         fig.suptitle(title)
     return fig
 
 
-def plot_energy_history(result, ax=None):
-    """Energy after every accepted step (and the length on a twin axis)."""
+def plot_energy_and_length(result, ax=None):
+    """Energy after every accepted step (and the length on a twin axis) of a ``FlowResult``.
+
+    (:func:`qsa.plotting.plot_energy_history` draws an energy against time on log axes.)
+    """
     if ax is None:
         _, ax = new_figure()
     ax.plot(result.t_steps, result.energy_steps, color="C0", lw=1.5, label="energy")

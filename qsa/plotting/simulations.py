@@ -8,6 +8,7 @@ and ``folding_figure`` take the results of :func:`qsa.paper.run_facet` and
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.ticker import MaxNLocator
 
 from qsa.plotting._core import new_figure
 
@@ -129,6 +130,7 @@ def plot_front_count(t, fronts, events=(), ax=None):
     fig, ax, t, keep = _time_axes(ax, (6.0, 3.0), t, events)
     ax.step(t[keep], np.asarray(fronts)[keep], where="post", color="C2")
     ax.set_ylabel("fronts")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     return fig
 
 

@@ -1,7 +1,7 @@
 r"""Evaluation of the front ODE's reduced system: one interface, a numpy and a numba backend.
 
 A backend evaluates, at front positions ``p`` (and, for a variable length, ``L``), the
-saddle-point system of the reduced flow (:mod:`qsa.reduction.ode`)
+saddle-point system of the reduced flow (:mod:`qsa.reduction.ode`) ::
 
     [ G   A^T ] [ p' ]   [ -dE/dp ]
     [ A   0   ] [ mu ] = [    0   ],    A = [ dC/dp ; 1^T / sqrt(2N) ],

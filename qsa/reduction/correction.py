@@ -4,7 +4,7 @@ The splice ``psi_N`` superposes the fronts' tails linearly; the true quasi-stead
 profile differs from it by the nonlinear response (through the curvature of ``W'``)
 to the overlapping tails, of relative size ``O(exp(-lambda d / 2))`` in the centre of
 a gap of width ``d``. One Newton step on the profile equation
-``R(kappa) = -alpha^2 kappa'' + W'(kappa) = 0`` modulo the slow directions predicts it:
+``R(kappa) = -alpha^2 kappa'' + W'(kappa) = 0`` modulo the slow directions predicts it: ::
 
     H delta = -R(psi_N) - B mu,    B^T delta = 0,
     H = -alpha^2 d^2 + W''(psi_N),    B = [d psi_N / d p_1, ..., d psi_N / d p_2N, 1],
@@ -12,7 +12,7 @@ a gap of width ``d``. One Newton step on the profile equation
 i.e. ``delta`` is orthogonal to the front translation modes and to a constant (the
 positions and the total turning are kept), and ``mu`` absorbs the residual's component
 along them (the force on the positions is what the reduction keeps). ``H delta = -R -
-B mu`` gives the residual of ``psi_N + delta`` without applying ``d^2`` again:
+B mu`` gives the residual of ``psi_N + delta`` without applying ``d^2`` again: ::
 
     R(psi_N + delta) = N(delta) - B mu,    N(delta) = W'(psi + delta) - W'(psi) - W''(psi) delta,
 

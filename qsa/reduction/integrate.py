@@ -15,7 +15,7 @@ rate ``~ 2 pi beta / R``, is the slowest of them) and the deviation of the true 
 manifold from the splices. A relative error ``eps`` of the interaction rate is
 exponentially amplified near a collision: a pair closing as ``d' = -c exp(-lambda d)``,
 i.e. ``exp(lambda d(t)) = exp(lambda d_0) - lambda c t`` and
-``t_c = (exp(lambda d_0) - 1) / (lambda c)``, with rate ``c (1 + eps)`` is off by
+``t_c = (exp(lambda d_0) - 1) / (lambda c)``, with rate ``c (1 + eps)`` is off by ::
 
     (eps / lambda) (t / t_c) / (1 - t / t_c)
 

@@ -16,7 +16,7 @@ reparameterization (the tangential gauge; the DAE of :mod:`qsa.flows.dae` picks 
 so that ``g`` stays uniform). On ``range M`` the flow is the gradient flow of ``E``
 for the metric ``<U1, (M M^dagger)^+ U1>``: with ``U1 = M w``, ``w = (phi, v)`` the
 extrinsic (normal, tangential) velocity and ``M = A S B^T`` a singular value
-decomposition, ``(M M^dagger)^+ M w = A S^{-1} B^T w`` and
+decomposition, ``(M M^dagger)^+ M w = A S^{-1} B^T w`` and ::
 
     <M w, (M M^dagger)^+ M w> = |B^T w|^2 = min_{r in ker M} |w - r|^2_{L2(dsigma)},
 
@@ -24,7 +24,7 @@ the ``L^2(dsigma)`` norm of the velocity modulo rigid motions (``ker M``).
 Reparameterizations cost nothing in the flow (the energy is invariant and the gauge
 is free), so the metric the flow induces on shapes is the quotient by ``v``:
 minimising over ``v`` removes the tangential part and the tangential components of
-the rigid motions, leaving
+the rigid motions, leaving ::
 
     |U1|^2 = min_{c in R^3} int (phi - c . r^n)^2 dsigma,
     r^n = (e1 . n, e2 . n, gamma . tau),
@@ -37,11 +37,11 @@ balanced) the curve is ``gamma(sigma) = int_0^sigma tau(theta) dsigma'`` with
 ``theta(sigma) = int_0^sigma psi_N``. A change of ``p_j`` changes the angle by
 ``Theta_j(sigma) = int_0^sigma d psi_N / d p_j`` and, since ``d tau / d theta = -n``,
 the position by ``d gamma / d p_j = -int_0^sigma n Theta_j dsigma'``. Its normal
-velocity is
+velocity is ::
 
     phi_j = n . d gamma / d p_j,   phi_j^perp = phi_j - (projection on span r^n)
 
-(:func:`normal_velocities`), and the pulled-back metric is the Gram matrix
+(:func:`normal_velocities`), and the pulled-back metric is the Gram matrix ::
 
     G_ij = int phi_i^perp phi_j^perp dsigma       (2N x 2N, positive semi-definite).
 
@@ -50,7 +50,7 @@ shape): ``G 1 = 0``.
 
 *Energy and constraints.* With ``L`` fixed,
 ``E(p) = int alpha^2/2 psi_N'^2 + W(psi_N) dsigma`` (:func:`energy`) and, integrating
-by parts,
+by parts, ::
 
     dE/dp_j = int R_kappa d psi_N / d p_j dsigma,    R_kappa = -alpha^2 psi_N'' + W'(psi_N)
 

@@ -16,7 +16,7 @@ the normal velocities ``phi_j^perp`` of the positions, and the force is
 restrict ``p`` to a manifold of dimension ``2N - 3``; the base point is fixed by
 ``sum p_j' = 0``. The constrained gradient flow of ``E(p)`` in the metric ``G``
 (equivalently the Galerkin projection of ``V^n`` on the tangent space,
-``min |V^n - sum p_j' phi_j^perp|``) is the saddle-point system
+``min |V^n - sum p_j' phi_j^perp|``) is the saddle-point system ::
 
     [ G   A^T ] [ p' ]   [ -dE/dp ]
     [ A   0   ] [ mu ] = [    0   ],    A = [ dC/dp ; 1^T / sqrt(2N) ],

@@ -7,7 +7,7 @@ matrix carries an absolute round-off error of order ``eps |J|`` -- at ``N = 10^4
 finite differences that is larger than the slow eigenvalues themselves. The factors
 are of order 2 each. With ``W = diag(dsigma)``, ``W2 = diag(dsigma, dsigma)``,
 ``H = W2 L_Lambda`` (symmetric) and the normal columns of ``M``,
-``M1 = [G; diag(g kappa)]`` (``G = -Delta_s - kappa^2``),
+``M1 = [G; diag(g kappa)]`` (``G = -Delta_s - kappa^2``), ::
 
     W J = -M1^T H M1,
 
@@ -16,7 +16,7 @@ is a symmetric-definite pencil. Its eigenvalues nearest a shift ``sigma`` are th
 largest of ``(W J - sigma W)^{-1} W``, and that inverse is applied without forming
 ``J``: with ``psi = G phi`` and ``chi = H_kk psi + H_kg (g kappa phi)`` the system
 ``(W J - sigma W) phi = b`` is the sparse (finite differences) or dense (Fourier)
-``3N x 3N`` system
+``3N x 3N`` system ::
 
     [ -sigma W - gk H_gg gk    -gk H_gk    -G^T ] [phi]   [b]
     [ -H_kg gk                 -H_kk        I   ] [psi] = [0]        (gk = diag(g kappa))

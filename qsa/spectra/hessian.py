@@ -2,7 +2,7 @@
 
 Constrained critical points satisfy ``nabla_I E = Lambda . Psi`` (e:Abs-CP) with
 ``Psi_j = nabla_I C_j`` spanning ``ker M-dagger``. The second variation of ``E`` on
-the closed manifold ``C(U) = 0`` is the quadratic form of
+the closed manifold ``C(U) = 0`` is the quadratic form of ::
 
     L_Lambda = nabla_I^2 E - sum_j Lambda_j nabla_I^2 C_j,
 
@@ -82,7 +82,7 @@ def check_input(energy, curve):
 
 
 def inner_norm(curve: Curve, f) -> float:
-    """``sqrt(<f, f>)`` for a nodal (N,) or stacked (2N,) vector, ``<.,.> = int . dsigma``.
+    """``sqrt(<f, f>)`` for a nodal (N,) or stacked (2N,) vector, ``<f, h> = int f h dsigma``.
 
     Parameters
     ----------

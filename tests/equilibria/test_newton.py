@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from qsa import Curve, FiniteDifference, Fourier
-from qsa.energies import CanhamHelfrich, Faceting, Perimeter
+from qsa.energies import CanhamHelfrich, Faceting, FunctionalizedCurvature, Perimeter
 from qsa.equilibria import circle, npulse, splice_polygon
 from qsa.equilibria.newton import (
     MESSAGES,
@@ -183,6 +183,44 @@ def test_failure_is_reported_not_raised():
     assert_status_convention(r, MESSAGES)
     assert r.n_newton == 1 and r.history.size == 2 and r.history[1] < r.history[0]
     assert np.all(np.isfinite(r.curve.kappa))
+
+
+def _functionalized_off_family(n, grid, shift=0.05):
+    """A faceting N-pulse as guess for FunctionalizedCurvature + Perimeter with L* moved off
+    the faceting family (sixth order in kappa: a full Newton step raises max|V^n| ~100x)."""
+    eq = npulse(n, 0.2, kstar=K, grid=grid)
+    L_star = eq.params["L"] + 1.0 * eq.params["nu2"] / 5.0 + shift
+    return FunctionalizedCurvature(0.2, 1.0, K) + Perimeter(5.0, L_star), eq.curve
+
+
+@pytest.mark.parametrize("n, shift", [(3, 0.05), (3, 0.2), (4, 0.05), (4, 0.2)])
+def test_line_search_takes_full_steps_on_sixth_order_problems(n, shift):
+    energy, guess = _functionalized_off_family(n, Fourier(101), shift)
+    r = polish(energy, guess)
+    free = polish(energy, guess, line_search=False)
+    assert r.success and r.residual <= 1e-8 * r.residual_scale
+    assert r.n_newton <= 7 and r.n_newton <= free.n_newton + 1
+    # the first full step raises the residual: the residual is not the merit
+    assert r.history[1] > 10 * r.history[0]
+
+
+def test_line_search_keeps_faceting_step_counts():
+    eq = npulse(3, 0.15, grid=Fourier(127))
+    c, s = eq.curve, eq.curve.grid.s
+    r = polish(eq.energy, c.with_kappa(c.kappa * (1 + 0.02 * np.cos(6 * np.pi * s))))
+    assert r.success and r.n_newton <= 5
+    rect = splice_polygon([np.pi / 2] * 4, [1.0, 1.5, 1.0, 1.5], 0.1, grid=Fourier(255))
+    r = polish(rect.energy, rect.curve)
+    assert r.success and r.n_newton <= 6
+
+
+def test_polish_never_returns_a_worse_state_than_its_guess():
+    energy, guess = _functionalized_off_family(3, Fourier(101))
+    r = polish(energy, guess, maxiter=1)
+    assert not r.success and r.status == -1
+    assert r.history[1] > r.history[0]  # the step was taken (and raised the residual) ...
+    assert r.residual / r.residual_scale <= r.history[0] * (1 + 1e-12)  # ... but not returned
+    assert np.array_equal(r.curve.kappa, guess.kappa)
 
 
 def test_bad_input_raises():
