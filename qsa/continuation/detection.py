@@ -33,15 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from qsa.continuation.branch import CriticalMode
-from qsa.spectra.symmetry import (
-    DENSE_SECTOR_LIMIT,
-    BlochSymmetry,
-    detect_symmetry,
-    sector_spectrum,
-)
+from qsa.spectra.symmetry import DENSE_SECTOR_LIMIT, BlochSymmetry, sector_spectrum
 
 __all__ = ["StabilityRecord", "count_unstable", "keeps_symmetry", "locate_crossing",
-           "critical_modes", "crossing_index", "switching_directions", "branch_symmetry"]
+           "critical_modes", "crossing_index", "switching_directions"]
 
 #: Eigenvalues per sector stored at each point (nearest 0).
 N_CRITICAL = 3
@@ -265,8 +260,3 @@ def switching_directions(bif, symmetry: BlochSymmetry, tol=1e-6):
             kept.append(v)
     w = bif.curve.dsigma
     return [v / np.sqrt(np.sum(w * v * v)) for v in kept]
-
-
-def branch_symmetry(curve, tol=1e-8) -> BlochSymmetry:
-    """The symmetry a branch starting at ``curve`` keeps (see :func:`detect_symmetry`)."""
-    return detect_symmetry(curve, tol)

@@ -52,7 +52,12 @@ from qsa.constraints import bind_constraints
 from qsa.curve import Curve
 from qsa.discretize import Fourier
 from qsa.equilibria.newton import _equal_arclength, _Factor, newton_solve
-from qsa.spectra.symmetry import BlochSymmetry, detect_symmetry, sector_spectrum
+from qsa.spectra.symmetry import (
+    DENSE_SECTOR_LIMIT,
+    BlochSymmetry,
+    detect_symmetry,
+    sector_spectrum,
+)
 
 __all__ = ["continuation", "touches_itself"]
 
@@ -71,6 +76,7 @@ class _Stability:
         self.k = k
         self.n_solves = 0
         self.n_locate = 0
+        self.unlocated = []  # intervals with a count change that was not located
         self.values = []  # per point: {b: eigenvalues of sector b, decreasing}, or None
         self.incomplete = False
 
@@ -94,7 +100,7 @@ class _Stability:
 
     def eigenvalue(self, eq, sym, b, j):
         """The ``j``-th largest eigenvalue of sector ``b`` at ``eq``: ``(lambda, error, spec)``."""
-        kk = None if self.k is None or sym.shift <= 400 else self.k
+        kk = None if sym.shift <= DENSE_SECTOR_LIMIT else (self.k or 8)
         spec = sector_spectrum(eq.energy, eq.curve, sym, k=kk, sectors=[b],
                                constraints=self.constraints)
         self.n_solves += 1
@@ -491,7 +497,10 @@ def _bifurcations(points, stab, solve_at, folds, opts, natural, probs=None, tang
                 bif = _one_crossing(points, stab, solve_at, i, sym, b, j, mult,
                                     1 if eb > ea else -1, fold_at, opts, natural, probs,
                                     tangents)
-                if bif is not None:
+                if bif is None:
+                    if opts["locate"]:
+                        stab.unlocated.append(i)
+                else:
                     out.append(bif)
                     if bif[1].kind == "fold":
                         located_folds.add(i)
@@ -520,8 +529,11 @@ def _one_crossing(points, stab, solve_at, i, sym, b, j, mult, sign, fold_at, opt
         else:
             fb = -np.sign(fa) * max(abs(fb), 1e-300)
     f, t0, t1 = solve_at(i)
-    best = locate_crossing(f, lambda eq: stab.eigenvalue(eq, sym, b, j), t0, t1, fa, fb,
-                           opts["ptol"])
+    try:
+        best = locate_crossing(f, lambda eq: stab.eigenvalue(eq, sym, b, j), t0, t1, fa, fb,
+                               opts["ptol"])
+    except SOLVER_ERRORS:
+        best = None
     if best is None:
         return None
     pos, eq, p, lam, spec_i, yy = best
@@ -550,6 +562,9 @@ def _describe(param, folds, bifs, stab):
         msg += "; branch points at " + ", ".join(
             f"{param}={b.parameter:.10g} ({lab[b.modes[0].label]} {b.sector}"
             f"{', double' if b.multiplicity == 2 else ''})" for b in br)
+    if stab.unlocated:
+        msg += ("; the unstable count changes without a located crossing after point(s) "
+                f"{sorted(set(stab.unlocated))} (see BranchPoint.sector_unstable)")
     if stab.incomplete:
         msg += ("; the unstable counts are of the eigenvalues nearest 0 per sector (sectors "
                 "too large for the complete count)")
