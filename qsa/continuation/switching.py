@@ -15,6 +15,11 @@ eigenvalue of a circle (O(2)) all directions of the critical plane are rotations
 so one branch; of a D_n-symmetric state (an ``n``-pulse) the fixed lines of the
 reflections (isotropy directions), one per group orbit; at a simple eigenvalue ``phi``
 and ``-phi`` unless a symmetry maps one to the other.
+
+The new branch keeps the symmetry of its first point when the grid holds it (a node
+shift by ``N/m``: ``m`` must divide ``N``, so odd orders on Fourier grids): its states
+are kept in that fixed-point space, which prevents jumping to other branches near its
+own bifurcations, and its spectra split into Bloch sectors.
 """
 
 from __future__ import annotations
@@ -177,7 +182,12 @@ def _follow(factory, cons, c_star, p_star, phi, eps, vals, step, param, bif, opt
              locate=opts["locate"], contact=opts["contact"])
     br = _arclength(factory, prob, x1, vals, step, param, opts["max_steps"], opts["ds_max"],
                     opts["ds_min"], stab, True, o, p0=float(y1[-1]), prev=prev)
+    note = f"; switched at {param}={p_star:.10g}"
+    m = bif.sector
+    if bif.symmetry is not None and bif.symmetry.circle and m > 1 and c_star.N % m:
+        note += (f"; N = {c_star.N} is not a multiple of {m}: the branch is followed without "
+                 f"its {m}-fold symmetry")
     return Branch(br.param, br.points, br.folds, br.branch_points, br.method, br.success,
-                  br.status, br.message + f"; switched at {param}={p_star:.10g}", br.n_steps,
+                  br.status, br.message + note, br.n_steps,
                   br.n_rejected, br.n_newton, br.bifurcations, br.symmetry, br.n_eigensolves,
                   br.n_locate_solves, factory, tuple(cons or ()), bif)

@@ -512,7 +512,33 @@ def _bifurcations(points, stab, solve_at, folds, opts, natural, probs=None, tang
             out.append((pos, Bifurcation(f.param, 1, "fold", (), f.index, equilibrium(prob, y),
                                          np.nan, 0, None, stab.symmetry)))
     out.sort(key=lambda x: (x[1].index, x[0]))
-    return tuple(b for _, b in out)
+    return _merge_coincident(tuple(b for _, b in out), points, opts["ptol"])
+
+
+def _merge_coincident(bifs, points, ptol, rtol=1e-5):
+    """One bifurcation for crossings of the same sector at the same parameter.
+
+    Without a grid symmetry (e.g. an n-pulse on a grid whose size n does not divide) a
+    symmetric double eigenvalue is two eigenvalues of one sector crossing together: they
+    are located separately, at the same parameter within the location tolerance, and
+    reported as one bifurcation of multiplicity 2. Coincident means within ``rtol`` of
+    the step between the bracketing points (the pair splits by the round-off the
+    equations without the symmetry let grow along the critical modes).
+    """
+    out = []
+    for b in bifs:
+        prev = out[-1] if out else None
+        step = abs(points[b.index + 1].param - points[b.index].param)
+        if (prev is not None and prev.kind == b.kind == "branch" and prev.index == b.index
+                and prev.sector == b.sector and np.sign(prev.change) == np.sign(b.change)
+                and abs(prev.parameter - b.parameter) <= max(100 * ptol, rtol * step)):
+            out[-1] = Bifurcation(prev.parameter, prev.multiplicity + b.multiplicity, "branch",
+                                  prev.modes + b.modes, prev.index, prev.equilibrium,
+                                  prev.eigenvalue, prev.change + b.change, prev.tangent,
+                                  prev.symmetry)
+        else:
+            out.append(b)
+    return tuple(out)
 
 
 def _one_crossing(points, stab, solve_at, i, sym, b, j, mult, sign, fold_at, opts, natural,

@@ -180,3 +180,15 @@ def test_bifurcation_diagram_draws_stability_and_markers():
     assert first.get_xdata()[-1] == b.bifurcations[0].parameter
     with pytest.raises(ValueError, match="measure"):
         bifurcation_diagram(b, measure="area2")
+
+
+def test_without_the_grid_symmetry_a_double_crossing_is_two_coincident_ones_merged():
+    from qsa.spectra.symmetry import BlochSymmetry
+
+    eq = circle(0.95, ALPHA, grid=Fourier(33), kstar=K, beta=BETA)
+    b = continuation(factory(), eq.curve, "L_star", (eq.params["L_star"], 5.45, -0.05),
+                     symmetry=BlochSymmetry(1, 33))
+    assert [(x.multiplicity, x.sector, x.change) for x in b.bifurcations] == [(2, 0, 2)] * 3
+    for x, m in zip(b.bifurcations, (2, 3, 4)):
+        assert x.parameter == pytest.approx(circle_L_star(crossing_curvature(m)), abs=1e-7)
+        assert len(x.modes) == 2 and {md.label for md in x.modes} == {"none"}
