@@ -1,4 +1,4 @@
-"""``qsa bifurcate npulse|splice|circle``: a branch of equilibria, its bifurcations, the switched branches.
+"""``qsa bifurcate npulse|splice|circle|ring``: a branch, its bifurcations, the switched branches.
 
 Builds the starting equilibrium exactly as ``qsa equilibrium`` does (same options),
 follows it in ``--param`` (``L_star``, ``alpha`` or ``beta`` of Faceting + Perimeter) to

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from qsa._checks import integer, real_number
+from qsa.constraints import bind_constraints
 from qsa.continuation.branch import MESSAGES, Bifurcation, Branch, Fold
 from qsa.continuation.detection import (
     count_unstable,
@@ -48,7 +49,6 @@ from qsa.continuation.steps import (
     parse_span,
     tangent,
 )
-from qsa.constraints import bind_constraints
 from qsa.curve import Curve
 from qsa.discretize import Fourier
 from qsa.equilibria.newton import _equal_arclength, _Factor, newton_solve

@@ -47,7 +47,7 @@ def test_mode_three_of_a_circle_switches_to_one_triangular_branch(circles):
     # the critical mode of the parent is the mode-3 shape of the first point
     s = first.curve.grid.s
     dk = first.curve.kappa - np.mean(first.curve.kappa)
-    c3 = np.sqrt(np.mean(dk * np.cos(6 * np.pi * s)) ** 2 + np.mean(dk * np.sin(6 * np.pi * s)) ** 2)
+    c3 = np.hypot(np.mean(dk * np.cos(6 * np.pi * s)), np.mean(dk * np.sin(6 * np.pi * s)))
     assert c3 > 0.9 * np.sqrt(np.mean(dk**2)) / np.sqrt(2)
 
 
