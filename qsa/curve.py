@@ -19,9 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from qsa.discretize import Fourier, Grid
+from qsa.polygon import polygon_self_intersects, self_intersections
 from qsa.resample import PeriodicInterpolant, closed_samples, equal_arclength_parameters
 
 __all__ = ["Curve", "polygon_self_intersects", "self_intersections"]
@@ -569,90 +569,3 @@ class Curve:
             kappa = (z1.real * z2.imag - z1.imag * z2.real) / np.abs(z1) ** 3
         z0 = curve.derivative(t[:1])[0]
         return cls(kappa, L, grid, float(np.angle(z1[0])), (z0.real, z0.imag))
-
-
-def polygon_self_intersects(x, y) -> bool:
-    """Whether the closed polygon through ``(x_j, y_j)`` has crossing non-adjacent edges.
-
-    Shorthand for ``self_intersections(x, y).shape[0] > 0`` (touching counts as crossing).
-
-    Parameters
-    ----------
-    x, y : array_like, shape (N,)
-        Vertices; the polygon closes from the last back to the first.
-
-    Returns
-    -------
-    bool
-
-    Examples
-    --------
-    >>> polygon_self_intersects([0, 1, 1, 0], [0, 0, 1, 1])  # a square
-    False
-    >>> polygon_self_intersects([0, 1, 0, 1], [0, 0, 1, 1])  # a bow tie
-    True
-    """
-    return bool(self_intersections(x, y).shape[0])
-
-
-def self_intersections(x, y):
-    """Pairs of crossing segments of the closed polygon through the nodes.
-
-    Segment ``j`` joins node ``j`` to node ``j+1`` (mod N). Two segments can only
-    cross when their midpoints are closer than the sum of their half-lengths,
-    so candidates come from a k-d tree query (O(N log N)); each candidate pair
-    of non-adjacent segments gets an exact orientation test (touching counts
-    as crossing).
-
-    Parameters
-    ----------
-    x, y : ndarray, shape (N,)
-
-    Returns
-    -------
-    ndarray of int, shape (K, 2)
-        Crossing pairs ``(i, j)``, ``i < j``; empty for a simple polygon.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> t = 2 * np.pi * np.arange(40) / 40
-    >>> self_intersections(np.cos(t), np.sin(t)).shape
-    (0, 2)
-    >>> self_intersections(np.sin(t), np.sin(2 * t)).shape[0] > 0   # figure eight
-    True
-    """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    N = x.size
-    xp, yp = np.roll(x, -1), np.roll(y, -1)
-    half = 0.5 * np.hypot(xp - x, yp - y)
-    mid = np.column_stack([0.5 * (x + xp), 0.5 * (y + yp)])
-    pairs = cKDTree(mid).query_pairs(2 * half.max() * (1 + 1e-9), output_type="ndarray")
-    if pairs.size == 0:
-        return np.zeros((0, 2), dtype=np.intp)
-    i, j = np.minimum(pairs[:, 0], pairs[:, 1]), np.maximum(pairs[:, 0], pairs[:, 1])
-    gap = j - i
-    keep = (gap != 1) & (gap != N - 1)  # adjacent segments share a node
-    i, j = i[keep], j[keep]
-
-    def orient(ax, ay, bx, by, cx, cy):
-        return np.sign((bx - ax) * (cy - ay) - (by - ay) * (cx - ax))
-
-    P = (x[i], y[i], xp[i], yp[i])
-    Q = (x[j], y[j], xp[j], yp[j])
-    o1 = orient(*P, Q[0], Q[1])
-    o2 = orient(*P, Q[2], Q[3])
-    o3 = orient(*Q, P[0], P[1])
-    o4 = orient(*Q, P[2], P[3])
-    cross = (o1 * o2 <= 0) & (o3 * o4 <= 0)
-    # collinear non-overlapping segments give all-zero orientations: check overlap
-    col = (o1 == 0) & (o2 == 0)
-    if np.any(col):
-        lo = lambda a, b: np.minimum(a, b)
-        hi = lambda a, b: np.maximum(a, b)
-        ovx = (lo(P[0], P[2]) <= hi(Q[0], Q[2])) & (lo(Q[0], Q[2]) <= hi(P[0], P[2]))
-        ovy = (lo(P[1], P[3]) <= hi(Q[1], Q[3])) & (lo(Q[1], Q[3]) <= hi(P[1], P[3]))
-        cross = np.where(col, ovx & ovy, cross)
-    out = np.column_stack([i[cross], j[cross]]).astype(np.intp)
-    return out[np.lexsort((out[:, 1], out[:, 0]))] if out.size else out

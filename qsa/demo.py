@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import json
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from qsa import Curve, FiniteDifference, Fourier, geometry
+from qsa import Curve, FiniteDifference, Fourier, equilibria, geometry, plotting, spectra
 from qsa.energies import CanhamHelfrich, DoubleWell, Faceting, Perimeter
+from qsa.studies import mode_decay
 
 __all__ = ["run_demo", "stage_curves", "stage_npulse", "stage_spectrum", "stage_splice",
            "stage_flow"]
@@ -82,8 +84,6 @@ def stage_curves(rng=None) -> dict:
 
 def stage_npulse() -> dict:
     """A 3-pulse faceted equilibrium (equilateral triangle with rounded corners)."""
-    from qsa import equilibria
-
     eq = equilibria.npulse(3, ALPHA, kstar=KSTAR, beta=BETA)
     out = eq.summary()
     out["_equilibrium"] = eq
@@ -92,8 +92,6 @@ def stage_npulse() -> dict:
 
 def stage_spectrum(eq) -> dict:
     """Spectrum of the normal-gauge linearization J at the 3-pulse, with its kernel report."""
-    from qsa import spectra
-
     sp = spectra.spectrum(eq.energy, eq.curve)
     out = sp.summary(max_eigenvalues=8)
     out["_spectrum"] = sp
@@ -107,10 +105,6 @@ def stage_splice() -> dict:
     the closure) are separated from the O(1) negative ones: the spectral dichotomy
     behind the front-position ODE.
     """
-    import warnings
-
-    from qsa import equilibria, spectra
-
     eq = equilibria.splice_polygon([2 * np.pi / 3] * 3, [0.9, 1.0, 1.1], ALPHA, kstar=KSTAR,
                                    grid=255)
     with warnings.catch_warnings():  # a splice is a quasi-equilibrium: said in the summary
@@ -131,8 +125,6 @@ def stage_splice() -> dict:
 
 def stage_flow(eq) -> dict:
     """A short DAE flow from the perturbed 3-pulse: decay rate against J's eigenvalue."""
-    from qsa.studies import mode_decay
-
     return mode_decay(eq)
 
 
@@ -174,8 +166,6 @@ def run_demo(outdir="qsa-demo", plots=True, verbose=True) -> dict:
         say(f"[qsa demo] {name:<8} done in {timings[name]:.2f} s")
     summary["timings_s"] = timings
     if plots:
-        from qsa import plotting
-
         figs = {
             "trillium.png": plotting.plot_curve_and_curvature(
                 objects["_curves"]["trillium"], title="trillium r = 1 + 0.2 cos 3θ"),

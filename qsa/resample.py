@@ -23,6 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.interpolate import make_interp_spline
 
 __all__ = [
@@ -277,9 +279,6 @@ def _equal_chord(curve, t, maxiter=30, tol=1e-13):
     each step is a sparse solve, O(N). Stops at ``max |F| <= tol c^2`` or when the
     Newton steps stall at round-off.
     """
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
-
     N = t.size
     z = curve.derivative(t)
     c = np.mean(np.abs(np.roll(z, -1) - z))

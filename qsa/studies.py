@@ -25,15 +25,20 @@ picklable by reference, so they run on a process pool or a Dask cluster.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+
+from qsa import FiniteDifference, Fourier, equilibria, spectra
+from qsa.energies import DoubleWell
+from qsa.equilibria import circle, npulse, splice_polygon
+from qsa.flows import FacetingFlow, solve_flow
 
 __all__ = ["npulse_study", "spectrum_study", "circle_spectrum_study", "circle_eigenvalues",
            "splice_spectrum_study", "flow_rate_study", "mode_amplitude", "mode_decay", "STUDIES"]
 
 
 def _grid(N, fd):
-    from qsa import FiniteDifference, Fourier
-
     if N is None:
         if fd:
             raise ValueError("N: finite differences need an explicit N")
@@ -44,8 +49,6 @@ def _grid(N, fd):
 
 
 def _npulse(n_pulses, alpha, kstar, beta, nu1, N, fd):
-    from qsa.equilibria import npulse
-
     if isinstance(n_pulses, float) and n_pulses.is_integer():
         n_pulses = int(n_pulses)
     return npulse(n_pulses, alpha, grid=_grid(N, fd), nu1=nu1, beta=beta, kstar=kstar)
@@ -121,10 +124,6 @@ def spectrum_study(n_pulses=3, alpha=0.1, kstar=5.0, beta=5.0, nu1=0.0, N=None, 
 
 def _spectrum(eq):
     """Spectrum at an (quasi-)equilibrium; "not an equilibrium" goes in ``status``, quietly."""
-    import warnings
-
-    from qsa import spectra
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", spectra.NotEquilibriumWarning)
         return spectra.spectrum(eq.energy, eq.curve)
@@ -154,8 +153,6 @@ def circle_eigenvalues(R, alpha, kstar=5.0, beta=5.0, kmax=8, well=None):
     -------
     ndarray, shape (kmax + 1,)
     """
-    from qsa.energies import DoubleWell
-
     well = DoubleWell(kstar) if well is None else well
     k = np.arange(int(kmax) + 1, dtype=float)
     lam = -((k**2 - 1) ** 2 / R**4) * (alpha**2 * k**2 / R**2 + float(well.d2W(1.0 / R)))
@@ -184,9 +181,6 @@ def circle_spectrum_study(R=1.0, alpha=0.1, kstar=5.0, beta=5.0, N=33, fd=False,
     >>> bool(r["max_rel_error"] < 1e-8), r["n_unstable"] == r["expected_unstable"]
     (True, True)
     """
-    from qsa import spectra
-    from qsa.equilibria import circle
-
     eq = circle(R, alpha, grid=_grid(N, fd), beta=beta, kstar=kstar)
     if 2 * int(kmax) + 1 > eq.curve.N:
         raise ValueError(f"kmax={kmax} needs N >= {2 * int(kmax) + 1}")
@@ -215,8 +209,14 @@ def _floats(text, name):
 
 
 def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", kstar=5.0,
-                          beta=5.0, N=None):
+                          beta=5.0, N=None, rtol=1e-4):
     """Small eigenvalues of a splice quasi-equilibrium shaped like a rounded polygon.
+
+    The eigenvalues of ``J`` nearest 0 come from the factored operator
+    (:func:`qsa.spectra.spectrum` with ``k``), so slow eigenvalues many decades below
+    ``eps |J|`` are resolved; the rigid motions are not deflated (at a quasi-equilibrium
+    their normal components are only ``O(delta)``-close to an invariant subspace: they
+    are among the slow eigenvalues).
 
     Parameters
     ----------
@@ -226,6 +226,8 @@ def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", ks
         (:func:`qsa.equilibria.splice_polygon`).
     N : int, optional
         Fourier size (default: resolving the fronts).
+    rtol : float
+        Relative accuracy required of the reported eigenvalues.
 
     Returns
     -------
@@ -234,26 +236,33 @@ def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", ks
         (sqrt(2) alpha))``, ``relative_residual``, ``n_unstable``, ``kernel_tol``,
         ``spectrum_status`` (1: a quasi-equilibrium beyond the spectrum's tolerance), the
         ``2 n_corners - 1`` slow eigenvalues as ``slow_0..`` (largest first; 3 of them
-        the rigid motions, the others front motions), ``fast`` (the next one);
-        array ``eigenvalues``.
+        the rigid motions, the others front motions) with their error estimates
+        ``slow_error_0..``, ``fast`` (the next one); array ``eigenvalues``.
     """
-    from qsa.equilibria import splice_polygon
-
     ang = np.radians(_floats(angles, "angles"))
     fac = _floats(facets, "facets")
     eq = splice_polygon(ang, fac, alpha, grid=_grid(N, False), kstar=kstar, beta=beta)
-    sp = _spectrum(eq)
-    ev = np.sort(np.real(np.asarray(sp.eigenvalues)))[::-1]
     n = len(ang)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", spectra.NotEquilibriumWarning)
+        sp = spectra.spectrum(eq.energy, eq.curve, k=2 * n + 2, deflate=False, rtol=rtol)
+    near = np.argsort(np.abs(sp.eigenvalues), kind="stable")
+    if near.size < 2 * n:
+        raise ValueError(f"alpha={alpha}: only {near.size} eigenvalues near 0 are resolved to "
+                         f"rtol={rtol} ({sp.unresolved.size} unresolved); raise rtol or N")
+    slow = near[: 2 * n - 1]
+    slow = slow[np.argsort(-sp.eigenvalues[slow], kind="stable")]
     d_min = float(eq.params["d_min"])
     out = {"n_nodes": int(eq.curve.N), "n_corners": n, "d_min": d_min,
            "delta": float(np.exp(-kstar * d_min / (np.sqrt(2) * alpha))),
            "relative_residual": float(eq.relative_residual), "n_unstable": int(sp.n_unstable),
-           "kernel_tol": float(sp.kernel_tol), "spectrum_status": int(sp.status)}
-    for i in range(2 * n - 1):
-        out[f"slow_{i}"] = float(ev[i])
-    out["fast"] = float(ev[2 * n - 1])
-    out["eigenvalues"] = ev
+           "kernel_tol": float(sp.kernel_tol), "spectrum_status": int(sp.status),
+           "n_unresolved": int(sp.unresolved.size)}
+    for i, j in enumerate(slow):
+        out[f"slow_{i}"] = float(sp.eigenvalues[j])
+        out[f"slow_error_{i}"] = float(sp.errors[j])
+    out["fast"] = float(sp.eigenvalues[near[2 * n - 1]])
+    out["eigenvalues"] = np.sort(sp.eigenvalues)[::-1]
     return out
 
 
@@ -296,10 +305,6 @@ def flow_rate_study(R=1.0, alpha=0.1, kstar=5.0, beta=5.0, mode=2, amplitude=1e-
         ``rel_diff_spectrum``, ``t_final``, ``n_steps``, ``flow_success``; arrays ``t``
         and ``amplitude`` (of the mode at the snapshots).
     """
-    from qsa import Fourier
-    from qsa.equilibria import circle
-    from qsa.flows import FacetingFlow, solve_flow
-
     k = int(mode)
     if k < 2:
         raise ValueError(f"mode must be >= 2 (0 changes the length, 1 translates), got {mode}")
@@ -348,9 +353,6 @@ def mode_decay(eq, N=192, mode=None, amplitude=2e-3, efolds=3.0, tol=1e-7, snaps
         ``eigenvalue``, ``measured_rate``, ``relative_error``, flow counters, and under
         ``"_flow"`` the pair (FlowResult, RMS V^n at its snapshots).
     """
-    from qsa import FiniteDifference, equilibria, spectra
-    from qsa.flows import FacetingFlow, solve_flow
-
     c = equilibria.polish(eq.energy, eq.curve.on_grid(FiniteDifference(N))).curve
     sp = spectra.spectrum(eq.energy, c)
     lam = sp.eigenvalues

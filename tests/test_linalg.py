@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from qsa.linalg import ReducedHessian, SparsePlusLowRank, to_dense
+from qsa.linalg import (
+    LowRankUpdate,
+    ReducedHessian,
+    SparsePlusLowRank,
+    factorize,
+    permutation_parity,
+    to_dense,
+)
 
 
 def random_reduced(seed, p=7, m=5, low_rank=0):
@@ -106,3 +113,72 @@ def test_bad_input():
         zero = sp.csr_matrix((7, 7))
         Hs = ReducedHessian(zero, sp.csr_matrix((5, 7)), sp.csr_matrix((5, 5)), H.cY, H.cU)
         Hs.shift_invert(0.0)  # H = 0
+
+
+def _random_matrix(seed, n=9):
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    A[np.abs(A) < 0.8] = 0.0  # sparse enough for SuperLU to pivot and permute
+    return A + np.diag(rng.choice([-3.0, 3.0], n))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_det_sign_and_solve_dense_sparse_bordered(seed):
+    A = _random_matrix(seed)
+    sign = int(np.sign(np.linalg.det(A)))
+    b = np.random.default_rng(seed + 10).standard_normal(A.shape[0])
+    for F in (factorize(A), factorize(sp.csc_matrix(A)),
+              factorize(sp.csc_matrix(A), permc_spec="NATURAL")):
+        assert F.det_sign() == sign
+        assert np.allclose(A @ F.solve(b), b, atol=1e-12 * np.abs(b).max())
+    # bordered: [[C, B1], [B2, D]] with the last two rows and columns as the border
+    C, B1, B2, D = A[:-2, :-2], A[:-2, -2:], A[-2:, :-2], A[-2:, -2:]
+    if abs(np.linalg.det(C)) > 1e-8:
+        F = factorize(sp.csc_matrix(C), B1, B2, D)
+        assert F.det_sign() == sign
+        assert np.allclose(A @ F.solve(b), b, atol=1e-10 * np.abs(b).max())
+        # the same core with a border whose determinant has the other sign
+        G = F.with_border(B1, B2, D + 1e3 * np.diag([1.0, -1.0]))
+        flipped = A.copy()
+        flipped[-2:, -2:] = D + 1e3 * np.diag([1.0, -1.0])
+        assert G.det_sign() == int(np.sign(np.linalg.det(flipped)))
+
+
+def test_permutation_parity():
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        p = rng.permutation(7)
+        assert permutation_parity(p) == int(round(np.linalg.det(np.eye(7)[p])))
+
+
+def test_factorize_reports_singular_and_non_finite_matrices():
+    with pytest.raises(np.linalg.LinAlgError):
+        factorize(np.ones((3, 3)) * [1.0, 1.0, 0.0])
+    with pytest.raises(np.linalg.LinAlgError):
+        factorize(sp.csc_matrix(np.diag([1.0, 0.0, 2.0])))
+    with pytest.raises(np.linalg.LinAlgError, match="non-finite"):
+        factorize(np.diag([1.0, np.nan]))
+    with pytest.raises(np.linalg.LinAlgError, match="non-finite"):
+        factorize(sp.csc_matrix(np.diag([1.0, np.inf])))
+
+
+@pytest.mark.parametrize("store", [True, False])
+def test_low_rank_update_solves_the_updated_matrix(store):
+    rng = np.random.default_rng(3)
+    n = 12
+    A = sp.diags([rng.uniform(2, 3, n), rng.uniform(-0.5, 0.5, n - 1)], [0, 1]).tocsc()
+    rows, cols = np.array([2, 7, 9]), np.array([0, 1, 5, 11])
+    C = rng.standard_normal((3, 4))
+    M = A.toarray()
+    M[np.ix_(rows, cols)] += C
+    b = rng.standard_normal((n, 2))
+    x = LowRankUpdate(factorize(A), rows, C, cols, store=store).solve(b)
+    assert np.allclose(M @ x, b, atol=1e-12)
+    # all columns (cols=None): a dense row
+    full = rng.standard_normal((1, n))
+    M1 = A.toarray()
+    M1[4] += full[0]
+    assert np.allclose(M1 @ LowRankUpdate(factorize(A), [4], full, store=store).solve(b[:, 0]),
+                       b[:, 0], atol=1e-12)
+    with pytest.raises(ValueError, match="shape"):
+        LowRankUpdate(factorize(A), rows, C[:, :3], cols)

@@ -1,7 +1,7 @@
 """The numerical kernels of continuation: the square system in ``(x, p)``, tangents, corrector.
 
 ``F(x, p) = 0`` is the square system of :func:`qsa.equilibria.polish`
-(:class:`~qsa.equilibria.newton.EquilibriumSystem`) with ``x = (kappa, L, a)`` for the
+(:class:`~qsa.equilibria.system.EquilibriumSystem`) with ``x = (kappa, L, a)`` for the
 energy ``energy_factory(p)``. The tangent ``t`` of the branch solves
 ``[F_x, F_p; row] t = e`` (``F_p`` by central differences in ``p``); the corrector is
 Newton on ``[F(x, p); <y - y_pred, t>_w] = 0`` with ``<., .>_w`` the grid quadrature on
@@ -20,13 +20,9 @@ import numpy as np
 from qsa.continuation.branch import BranchPoint
 from qsa.curve import Curve
 from qsa.energies import residual_scale
-from qsa.equilibria.newton import (
-    EquilibriumSystem,
-    NewtonRun,
-    _assemble,
-    _Factor,
-    polish_result,
-)
+from qsa.equilibria.newton import NewtonRun, polish_result
+from qsa.equilibria.system import EquilibriumSystem, assemble_jacobian
+from qsa.linalg import factorize
 
 __all__ = ["Problem", "tangent", "corrector", "equilibrium", "make_point", "parse_span",
            "SOLVER_ERRORS"]
@@ -127,15 +123,12 @@ class Problem:
         D2[:-1, -1] = Fp[N:]
         D2[-1, :-1] = row[N:-1]
         D2[-1, -1] = row[-1]
-        aug = _assemble(A, B2, C2, D2, low)
-        return aug, _assemble(A, B, Crows, D, low)
+        aug = assemble_jacobian(A, B2, C2, D2, low)
+        return aug, assemble_jacobian(A, B, Crows, D, low)
 
 
 def _solve_aug(aug, rhs):
-    fac = _Factor(aug)
-    if fac.singular:
-        raise np.linalg.LinAlgError("singular augmented system")
-    out = fac.solve(rhs)
+    out = factorize(aug).solve(rhs)  # LinAlgError if singular
     if not np.all(np.isfinite(out)):
         raise np.linalg.LinAlgError("non-finite solution")
     return out
@@ -156,7 +149,7 @@ def tangent(prob, x, p, prev):
     t /= np.sqrt(np.sum(wt * t * t))
     if np.sum(wt * t * prev) < 0:
         t = -t
-    det_sign = _Factor(Fx).det_sign()
+    det_sign = factorize(Fx).det_sign()
     return t, det_sign
 
 

@@ -51,7 +51,9 @@ from qsa.continuation.steps import (
 )
 from qsa.curve import Curve
 from qsa.discretize import Fourier
-from qsa.equilibria.newton import _equal_arclength, _Factor, newton_solve
+from qsa.equilibria.newton import newton_solve
+from qsa.equilibria.system import equal_arclength
+from qsa.linalg import factorize
 from qsa.spectra.symmetry import (
     DENSE_SECTOR_LIMIT,
     BlochSymmetry,
@@ -196,7 +198,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     max_steps = integer(max_steps, "max_steps", minimum=0)
     vals, step = parse_span(values)
     p0 = float(vals[0])
-    guess = _equal_arclength(curve)
+    guess = equal_arclength(curve)
     cons = bind_constraints(constraints, guess) or None
     prob = Problem(energy_factory, guess, p0, cons)
     run = newton_solve(prob.system, prob.system.pack(guess), tol, max(maxiter, 30),
@@ -224,7 +226,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
 # --------------------------------------------------------------------------- natural
 def _natural(factory, prob, x, vals, param, stab, opts):
     tol, maxiter = opts["tol"], opts["maxiter"]
-    det = _Factor(prob.system.jacobian(x, factory(vals[0]))).det_sign()
+    det = factorize(prob.system.jacobian(x, factory(vals[0]))).det_sign()
     y0 = np.append(x, vals[0])
     points = [make_point(prob, y0, np.nan, det, stab.record(factory(vals[0]),
                                                             prob.system.curve(x)))]
@@ -256,7 +258,7 @@ def _natural(factory, prob, x, vals, param, stab, opts):
                 status = 1
                 msg = f"{MESSAGES[1]}: between {param}={vals[k - 1]:.8g} and {p:.8g}"
                 break
-            det = _Factor(prob.system.jacobian(y[:-1], factory(p))).det_sign()
+            det = factorize(prob.system.jacobian(y[:-1], factory(p))).det_sign()
             points.append(make_point(prob, y, np.nan, det, stab.record(factory(p), c), 0, (),
                                      its, its))
             states.append(y)

@@ -43,7 +43,9 @@ from __future__ import annotations
 import numpy as np
 
 from qsa._checks import integer, real_number
+from qsa.curve import Curve
 from qsa.discretize import Fourier, Grid
+from qsa.energies import Faceting, Perimeter
 from qsa.energies.wells import resolve_well
 from qsa.equilibria.orbit import orbit_with_turning
 from qsa.equilibria.result import Equilibrium
@@ -213,9 +215,6 @@ def npulse(n_pulses, alpha, well=None, grid=None, nu1=0.0, beta=5.0, kstar=None)
     >>> bool(eq.success), eq.params["nu2"] < 0, eq.params["L"] < eq.params["L_star"]
     (True, True, True)
     """
-    from qsa.curve import Curve
-    from qsa.energies import Faceting, Perimeter
-
     n = integer(n_pulses, "n_pulses", minimum=2, too_small=(
         "{name}={value}: need at least {minimum} pulses (one pulse turns by 2 pi in a "
         "single facet and cannot close into an N-fold symmetric curve)"))
@@ -271,9 +270,6 @@ def circle(R, alpha, grid=None, beta=5.0, well=None, kstar=None):
     >>> round(eq.params["L_star"], 10) == round(2 * np.pi - (6.0 - 4.0) / 5.0, 10)
     True
     """
-    from qsa.curve import Curve
-    from qsa.energies import Faceting, Perimeter
-
     R = real_number(R, "R", positive=True)
     alpha = real_number(alpha, "alpha", positive=True)
     beta = real_number(beta, "beta", positive=True)

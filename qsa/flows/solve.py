@@ -16,6 +16,7 @@ in practice bit for bit).
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 import tempfile
@@ -26,8 +27,11 @@ import numpy as np
 
 from qsa._checks import integer, real_number
 from qsa._version import __version__
+from qsa.curve import Curve
 from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
 from qsa.io import load_npz, save_npz
+from qsa.polygon import self_intersections
+from qsa.resample import closed_samples, resample_closed
 
 __all__ = ["solve_flow", "FlowResult", "prepare_initial"]
 
@@ -145,9 +149,6 @@ def prepare_initial(initial, N=None):
     ValueError
         For NaN, open or self-intersecting data, fewer than 4 points, or a bad N.
     """
-    from qsa.curve import Curve, self_intersections
-    from qsa.resample import closed_samples, resample_closed
-
     if isinstance(initial, Curve):
         x, y = initial.positions()
     else:
@@ -432,8 +433,6 @@ def _load_checkpoint(path, model, options):
 
 
 def _comparable(d):
-    import json
-
     return json.loads(json.dumps(d, default=str))
 
 

@@ -10,7 +10,8 @@ BDF2 has ``psi = ((1+w)^2 y_n - w^2 y_{n-1}) / (1+2w)``, ``c = (1+2w)/((1+w) k)`
 
 Pieces (pure kernels first, then the stateful integrator):
 
-* linear solvers for the Newton matrix: :class:`SparseLU` (SuperLU on the
+* linear solvers for the Newton matrix, built on :func:`qsa.linalg.factorize` and
+  :class:`qsa.linalg.LowRankUpdate`: :class:`SparseLU` (SuperLU on the
   node-interleaved ordering, a banded matrix with periodic corners),
   :class:`LowRankUpdateLU` (the local stencil LU plus a dense capacitance
   matrix for the long-range adhesion block: the block only couples the ``N``
@@ -40,9 +41,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
+
+from qsa import linalg
 
 __all__ = [
     "SparseLU",
@@ -102,6 +103,7 @@ class SparseLU:
                  max_dense=4):
         J = sp.csc_matrix(J)
         n = J.shape[0]
+        self.shape = J.shape
         self.perm = np.arange(n) if perm is None else np.asarray(perm)
         Jp = J[self.perm][:, self.perm].tocsr()
         counts = np.diff(Jp.indptr)
@@ -120,23 +122,15 @@ class SparseLU:
                 W.append(w)
             rows.eliminate_zeros()
             Jp = rows
-        self.lu = spla.splu(Jp.tocsc(), permc_spec=permc_spec)
+        self.lu = linalg.factorize(Jp.tocsc(), permc_spec=permc_spec)
         if dense.size:
             # J = J0 + E W^T (E = unit vectors of the dense rows): Woodbury of rank |dense|
-            E = np.zeros((n, dense.size))
-            E[dense, np.arange(dense.size)] = 1.0
-            self.Z = self.lu.solve(E)  # J0^{-1} E
-            self.W = np.array(W)  # (k, n)
-            S = np.eye(dense.size) + self.W @ self.Z
-            self.S = sla.lu_factor(S, check_finite=False)
+            self.lu = linalg.LowRankUpdate(self.lu, dense, np.array(W), store=True)
 
     def solve(self, b):
         b = np.asarray(b, dtype=float)
         x = np.empty_like(b)
-        z = self.lu.solve(np.ascontiguousarray(b[self.perm]))
-        if hasattr(self, "W"):
-            z = z - self.Z @ sla.lu_solve(self.S, self.W @ z, check_finite=False)
-        x[self.perm] = z
+        x[self.perm] = self.lu.solve(np.ascontiguousarray(b[self.perm]))
         return x
 
 
@@ -159,24 +153,13 @@ class LowRankUpdateLU:
     def __init__(self, J_local, J_nonlocal, perm=None):
         self.local = SparseLU(J_local, perm)
         Jn = sp.coo_matrix(J_nonlocal)
-        self.rows = np.unique(Jn.row)
-        self.cols = np.unique(Jn.col)
-        n = J_local.shape[0]
-        self.C = sp.csr_matrix(J_nonlocal)[self.rows][:, self.cols].toarray()
-        E = np.zeros((n, self.rows.size))
-        E[self.rows, np.arange(self.rows.size)] = 1.0
-        Z = self.local.solve(E)[self.cols]
-        S = self.C @ Z
-        S[np.diag_indices_from(S)] += 1.0
-        self.S = sla.lu_factor(S, check_finite=False)
+        rows, cols = np.unique(Jn.row), np.unique(Jn.col)
+        C = sp.csr_matrix(J_nonlocal)[rows][:, cols].toarray()
+        # |R| = N rows: keep only Z[cols] (two banded solves per solution)
+        self.lu = linalg.LowRankUpdate(self.local, rows, C, cols, store=False)
 
     def solve(self, b):
-        b = np.asarray(b, dtype=float)
-        x0 = self.local.solve(b)
-        w = sla.lu_solve(self.S, self.C @ x0[self.cols], check_finite=False)
-        r = b.copy()
-        r[self.rows] -= w
-        return self.local.solve(r)
+        return self.lu.solve(b)
 
 
 class DenseLU:
@@ -185,11 +168,10 @@ class DenseLU:
     kind = "dense"
 
     def __init__(self, J):
-        self.lu = sla.lu_factor(J.toarray() if sp.issparse(J) else np.asarray(J),
-                                check_finite=False)
+        self.lu = linalg.factorize(J.toarray() if sp.issparse(J) else np.asarray(J))
 
     def solve(self, b):
-        return sla.lu_solve(self.lu, np.asarray(b, dtype=float), check_finite=False)
+        return self.lu.solve(b)
 
 
 #: Linear-solver strategies accepted by :func:`factorize`.
@@ -329,9 +311,17 @@ class NewtonSolver:
         -------
         y : ndarray, shape (size,)
         converged : bool
+            False also when a Newton matrix is singular (``numpy.linalg.LinAlgError``).
         """
-        sys_, idx = self.system, self.index
         self.n_solves += 1
+        try:
+            return self._iterate(psi, c, guess)
+        except np.linalg.LinAlgError:
+            self.n_failures += 1
+            return np.array(guess, dtype=float), False
+
+    def _iterate(self, psi, c, guess):
+        sys_, idx = self.system, self.index
         y = np.array(guess, dtype=float)
         entry = self._pick(c)
         fresh = entry is None

@@ -8,15 +8,14 @@ an existing figure (e.g. in a notebook).
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 __all__ = ["new_figure", "plot_curve", "plot_curvature", "plot_curve_and_curvature", "save"]
 
 
 def new_figure(ncols=1, nrows=1, size=(5.0, 4.0)):
     """A ``Figure`` with an Agg canvas and its axes (a single ``Axes`` or an array)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(size[0] * ncols, size[1] * nrows), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(nrows, ncols)

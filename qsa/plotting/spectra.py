@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLocator
 
+from qsa import geometry
 from qsa.plotting._core import figure_pair, new_figure, plot_curve
 
 __all__ = ["plot_spectrum", "plot_eigenmode", "eigenmode_fields", "near_zero_indices"]
@@ -225,8 +226,6 @@ def eigenmode_fields(spec, curve, index=0):
     ``phi = None`` and ``kappa1`` the first half of the eigenvector; ``"scaled"``:
     ``phi = None``, ``kappa1`` the first N entries. Real parts are taken.
     """
-    from qsa import geometry
-
     if not 0 <= index < spec.eigenvalues.size:
         raise ValueError(f"index must be in [0, {spec.eigenvalues.size}), got {index}")
     v = np.real(spec.eigenvectors[:, index])

@@ -77,7 +77,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from qsa.discretize import Fourier
-from qsa.equilibria.splice import SpliceProfile
+from qsa.equilibria.profile import SpliceProfile
 
 __all__ = ["PeriodicQuadrature", "SpliceFields", "splice_fields", "normal_velocities",
            "closure", "residual", "energy", "energy_gradient", "length_derivatives",

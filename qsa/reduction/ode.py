@@ -58,10 +58,12 @@ import numpy as np
 
 from qsa.energies.wells import resolve_well
 from qsa.equilibria import heteroclinic
-from qsa.equilibria.splice import SpliceProfile, default_cutoff
+from qsa.equilibria.profile import SpliceProfile
+from qsa.equilibria.splice import default_cutoff
 from qsa.reduction import manifold
 from qsa.reduction.backends import NumpyBackend, select_backend
 from qsa.reduction.correction import D2_STENCIL, folded_band
+from qsa.reduction.fronts import detect_fronts
 from qsa.reduction.integrate import (
     FrontODEResult,
     ODECollision,
@@ -344,8 +346,6 @@ class FrontODE:
 
     def crossings(self, p, cutoff=None):
         """Crossings of ``kstar/2`` by the splice profile (the detector's front positions)."""
-        from qsa.reduction.fronts import detect_fronts
-
         prof = self.profile(p, cutoff)
         f = detect_fronts(prof(self.sigma), self.front.kstar, self.length)
         return f.positions

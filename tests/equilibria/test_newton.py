@@ -6,14 +6,8 @@ import pytest
 from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import CanhamHelfrich, Faceting, FunctionalizedCurvature, Perimeter
 from qsa.equilibria import circle, npulse, splice_polygon
-from qsa.equilibria.newton import (
-    MESSAGES,
-    EquilibriumSystem,
-    PolishResult,
-    _cumulative_transpose,
-    normal_velocity,
-    polish,
-)
+from qsa.equilibria.newton import MESSAGES, PolishResult, normal_velocity, polish
+from qsa.equilibria.system import EquilibriumSystem, _cumulative_transpose
 from qsa.linalg import to_dense
 from tests.helpers import assert_status_convention, fitted_order, skew_curve
 

@@ -9,10 +9,10 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from qsa.curve import self_intersections
 from qsa.flows.base import DAESystem
+from qsa.linalg import factorize
 
 __all__ = ["CurveDAE", "equalize_chords", "self_intersections"]
 
@@ -98,7 +98,7 @@ def equalize_chords(x, y, *, tol=1e-13, maxiter=30, max_spread=0.05):
         cols = np.concatenate([jp, j, N + jp, N + j])
         vals = np.concatenate([2 * ex, -2 * ex, 2 * ey, -2 * ey])
         J = sp.csr_matrix((vals, (rows, cols)), shape=(N, 2 * N))
-        lam = spla.splu((J @ J.T).tocsc()).solve(r)
+        lam = factorize((J @ J.T).tocsc()).solve(r)
         step = J.T @ lam
         x -= step[:N]
         y -= step[N:]
@@ -237,7 +237,7 @@ class CurveDAE(DAESystem):
         sel[self.differential_rows] = 1.0
         M = (sp.diags(sel) @ Jd + sp.diags(1.0 - sel) @ Jy).tocsc()
         rhs = -self.residual(y, zero) * sel
-        return spla.splu(M).solve(rhs)
+        return factorize(M).solve(rhs)
 
     # ---------------------------------------------------------- geometry
     def _geometry(self, X, Y):

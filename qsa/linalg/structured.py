@@ -1,4 +1,4 @@
-"""Small linear-algebra helpers shared by the operator layers.
+"""Structured matrices of the operator layers: sparse plus low rank, implicit-state Hessians.
 
 ``SparsePlusLowRank`` represents ``S + U @ V.T`` with ``S`` sparse and ``U, V``
 thin dense factors. Finite-difference Hessians are sparse except for the
@@ -10,20 +10,15 @@ whose state ``Y`` is defined implicitly by sparse equations ``c(Y, U) = 0``
 (e.g. positions obtained by cumulative integration): dense as a matrix, exact
 and O(nnz) in factored form, with shift-invert solves through one sparse
 saddle-point system.
-
-:func:`factorize` is the one LU factorization of the package: dense (LAPACK),
-sparse (SuperLU) or either with a thin dense border, solved by block elimination.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["SparsePlusLowRank", "ReducedHessian", "to_dense", "is_matrix_like", "factorize",
-           "Factorization"]
+__all__ = ["SparsePlusLowRank", "ReducedHessian", "to_dense", "is_matrix_like"]
 
 
 class SparsePlusLowRank:
@@ -530,113 +525,3 @@ def is_matrix_like(A) -> bool:
     (True, True, False)
     """
     return isinstance(A, (np.ndarray, SparsePlusLowRank, ReducedHessian)) or sp.issparse(A)
-
-
-class Factorization:
-    """LU factors of ``[[C, B1], [B2, D]]`` with a dense or sparse core ``C`` and a thin border.
-
-    Built by :func:`factorize`. The border (``p`` extra rows and columns, ``p`` small)
-    is eliminated by the Schur complement ``S = D - B2 C^{-1} B1``; ``C`` is factored
-    once (LAPACK ``getrf`` for dense, SuperLU with COLAMD for sparse cores).
-
-    Attributes
-    ----------
-    shape : tuple of int
-        ``(n + p, n + p)``.
-    nnz : int
-        Number of stored entries of the factors of ``C`` (``n^2`` for dense).
-    """
-
-    def __init__(self, C, B1=None, B2=None, D=None, _core=None):
-        n = C.shape[0]
-        if _core is not None:
-            self._solve, self.nnz = _core
-        elif sp.issparse(C):
-            try:
-                lu = spla.splu(sp.csc_matrix(C), permc_spec="COLAMD")
-            except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
-                raise np.linalg.LinAlgError(f"singular matrix: {exc}") from None
-            self._solve = lu.solve
-            self.nnz = int(lu.L.nnz + lu.U.nnz)
-        else:
-            C = np.asarray(C, dtype=float)
-            lu, piv = sla.lu_factor(C, check_finite=True)
-            if np.any(np.diag(lu) == 0):
-                raise np.linalg.LinAlgError("singular matrix: zero pivot in LU")
-            self._solve = lambda b: sla.lu_solve((lu, piv), b, check_finite=False)
-            self.nnz = n * n
-        p = 0 if B1 is None else np.asarray(B1).shape[1]
-        self._n, self._p = n, p
-        self.shape = (n + p, n + p)
-        if p:
-            self._B1 = np.asarray(B1, dtype=float)
-            self._B2 = np.asarray(B2, dtype=float)
-            self._Z = self._solve(self._B1)
-            schur = np.asarray(D, dtype=float) - self._B2 @ self._Z
-            self._schur = sla.lu_factor(schur)
-
-    def with_border(self, B1=None, B2=None, D=None) -> Factorization:
-        """The same core ``C`` (not factored again) with another border.
-
-        Parameters
-        ----------
-        B1 : ndarray, shape (n, p), optional
-        B2 : ndarray, shape (p, n), optional
-        D : ndarray, shape (p, p), optional
-
-        Returns
-        -------
-        Factorization
-        """
-        return Factorization(_Shape(self._n), B1, B2, D, _core=(self._solve, self.nnz))
-
-    def solve(self, b):
-        """``x`` with ``[[C, B1], [B2, D]] x = b``, shape (n + p,) (or (n,) without border)."""
-        b = np.asarray(b, dtype=float)
-        n, p = self._n, self._p
-        if not p:
-            return self._solve(b)
-        f, g = b[:n], b[n:]
-        y0 = self._solve(f)
-        y = sla.lu_solve(self._schur, g - self._B2 @ y0)
-        return np.concatenate([y0 - self._Z @ y, y])
-
-
-class _Shape:
-    """Stand-in for a core that is already factored (only its shape is read)."""
-
-    def __init__(self, n):
-        self.shape = (n, n)
-
-
-def factorize(C, B1=None, B2=None, D=None) -> Factorization:
-    """LU factorization of ``C`` (dense or sparse), optionally bordered by ``B1, B2, D``.
-
-    Parameters
-    ----------
-    C : ndarray or sparse matrix, shape (n, n)
-    B1 : ndarray, shape (n, p), optional
-    B2 : ndarray, shape (p, n), optional
-    D : ndarray, shape (p, p), optional
-
-    Returns
-    -------
-    Factorization
-        ``.solve(b)`` for the bordered system ``[[C, B1], [B2, D]]``.
-
-    Raises
-    ------
-    numpy.linalg.LinAlgError
-        ``C`` is exactly singular.
-
-    Examples
-    --------
-    >>> import numpy as np, scipy.sparse as sp
-    >>> C = sp.diags([2.0, 3.0, 4.0]).tocsc()
-    >>> F = factorize(C, np.ones((3, 1)), np.ones((1, 3)), np.zeros((1, 1)))
-    >>> A = np.block([[C.toarray(), np.ones((3, 1))], [np.ones((1, 3)), np.zeros((1, 1))]])
-    >>> b = np.arange(4.0)
-    >>> bool(np.allclose(A @ F.solve(b), b))
-    True
-    """
-    return Factorization(C, B1, B2, D)
