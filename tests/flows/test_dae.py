@@ -12,6 +12,7 @@ from qsa.flows.base import DAESystem, FlowModel
 from qsa.flows.dae import CHA, FacetingFlow
 from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
+from tests.helpers import paper_curve
 
 PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
 TABLE_T1 = CHAScenario()
@@ -24,12 +25,6 @@ def smooth_curve(N, scale=1.3, shift=0.05):
     r = 1 + 0.1 * np.cos(3 * th) + 0.05 * np.sin(2 * th)
     x, y, _ = resample_closed(scale * r * np.cos(th) + shift, scale * r * np.sin(th), N,
                               method="chord")
-    return x, y
-
-
-def paper_curve(N):
-    """Equal-chord nodes of the convergence study's start (2000 samples resampled)."""
-    x, y, _ = resample_closed(*CONVERGENCE.samples(2000), N, method="chord")
     return x, y
 
 

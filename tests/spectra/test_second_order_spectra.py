@@ -13,8 +13,7 @@ from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import FunctionalizedCurvature, Perimeter
 from qsa.equilibria import npulse, polish, residual_scale
 from qsa.spectra import kernel_report, spectrum
-from tests.energies.test_second_order import coupled_second_order
-from tests.helpers import fitted_order
+from tests.helpers import coupled_second_order, fitted_order
 
 pytestmark = pytest.mark.filterwarnings("error::qsa.spectra.NotEquilibriumWarning")
 
