@@ -7,7 +7,7 @@ from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import CanhamHelfrich, Faceting, FunctionalizedCurvature, Perimeter
 from qsa.equilibria import circle, npulse, splice_polygon
 from qsa.equilibria.newton import MESSAGES, PolishResult, normal_velocity, polish
-from qsa.equilibria.system import EquilibriumSystem, _cumulative_transpose
+from qsa.equilibria.system import EquilibriumSystem
 from qsa.linalg import to_dense
 from tests.helpers import (
     assert_quadratic_convergence,
@@ -42,13 +42,6 @@ def test_fast_normal_velocity_matches_energy():
         for E in (Faceting(0.1, K) + Perimeter(5.0, 6.0), CanhamHelfrich(0.3)):
             assert np.allclose(normal_velocity(E, c), E.normal_velocity(c), rtol=0,
                                atol=1e-10 * np.max(np.abs(E.normal_velocity(c))))
-
-
-def test_cumulative_transpose_fd():
-    grid = FiniteDifference(17)
-    v = np.random.default_rng(1).standard_normal(17)
-    assert np.allclose(_cumulative_transpose(grid, v), grid.cumulative_matrix().T @ v,
-                       atol=1e-15)
 
 
 def test_npulse_is_reproduced_and_multipliers():
