@@ -209,8 +209,14 @@ def _floats(text, name):
 
 
 def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", kstar=5.0,
-                          beta=5.0, N=None):
+                          beta=5.0, N=None, rtol=1e-4):
     """Small eigenvalues of a splice quasi-equilibrium shaped like a rounded polygon.
+
+    The eigenvalues of ``J`` nearest 0 come from the factored operator
+    (:func:`qsa.spectra.spectrum` with ``k``), so slow eigenvalues many decades below
+    ``eps |J|`` are resolved; the rigid motions are not deflated (at a quasi-equilibrium
+    their normal components are only ``O(delta)``-close to an invariant subspace: they
+    are among the slow eigenvalues).
 
     Parameters
     ----------
@@ -220,6 +226,8 @@ def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", ks
         (:func:`qsa.equilibria.splice_polygon`).
     N : int, optional
         Fourier size (default: resolving the fronts).
+    rtol : float
+        Relative accuracy required of the reported eigenvalues.
 
     Returns
     -------
@@ -228,24 +236,33 @@ def splice_spectrum_study(alpha=0.12, angles="120,120,120", facets="1,1.4,1", ks
         (sqrt(2) alpha))``, ``relative_residual``, ``n_unstable``, ``kernel_tol``,
         ``spectrum_status`` (1: a quasi-equilibrium beyond the spectrum's tolerance), the
         ``2 n_corners - 1`` slow eigenvalues as ``slow_0..`` (largest first; 3 of them
-        the rigid motions, the others front motions), ``fast`` (the next one);
-        array ``eigenvalues``.
+        the rigid motions, the others front motions) with their error estimates
+        ``slow_error_0..``, ``fast`` (the next one); array ``eigenvalues``.
     """
     ang = np.radians(_floats(angles, "angles"))
     fac = _floats(facets, "facets")
     eq = splice_polygon(ang, fac, alpha, grid=_grid(N, False), kstar=kstar, beta=beta)
-    sp = _spectrum(eq)
-    ev = np.sort(np.real(np.asarray(sp.eigenvalues)))[::-1]
     n = len(ang)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", spectra.NotEquilibriumWarning)
+        sp = spectra.spectrum(eq.energy, eq.curve, k=2 * n + 2, deflate=False, rtol=rtol)
+    near = np.argsort(np.abs(sp.eigenvalues), kind="stable")
+    if near.size < 2 * n:
+        raise ValueError(f"alpha={alpha}: only {near.size} eigenvalues near 0 are resolved to "
+                         f"rtol={rtol} ({sp.unresolved.size} unresolved); raise rtol or N")
+    slow = near[: 2 * n - 1]
+    slow = slow[np.argsort(-sp.eigenvalues[slow], kind="stable")]
     d_min = float(eq.params["d_min"])
     out = {"n_nodes": int(eq.curve.N), "n_corners": n, "d_min": d_min,
            "delta": float(np.exp(-kstar * d_min / (np.sqrt(2) * alpha))),
            "relative_residual": float(eq.relative_residual), "n_unstable": int(sp.n_unstable),
-           "kernel_tol": float(sp.kernel_tol), "spectrum_status": int(sp.status)}
-    for i in range(2 * n - 1):
-        out[f"slow_{i}"] = float(ev[i])
-    out["fast"] = float(ev[2 * n - 1])
-    out["eigenvalues"] = ev
+           "kernel_tol": float(sp.kernel_tol), "spectrum_status": int(sp.status),
+           "n_unresolved": int(sp.unresolved.size)}
+    for i, j in enumerate(slow):
+        out[f"slow_{i}"] = float(sp.eigenvalues[j])
+        out[f"slow_error_{i}"] = float(sp.errors[j])
+    out["fast"] = float(sp.eigenvalues[near[2 * n - 1]])
+    out["eigenvalues"] = np.sort(sp.eigenvalues)[::-1]
     return out
 
 

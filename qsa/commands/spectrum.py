@@ -45,11 +45,12 @@ def add_parser(sub):
 
 
 def run(args):
-    from qsa.spectra import NotEquilibriumWarning, spectrum
+    from qsa.spectra import NotEquilibriumWarning, UnresolvedEigenvalueWarning, spectrum
 
     eq = equilibrium.build_polished(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotEquilibriumWarning)
+        warnings.simplefilter("always", UnresolvedEigenvalueWarning)
         spec = spectrum(eq.energy, eq.curve, k=args.k, sigma=args.sigma, gauge=args.gauge,
                         reject_spurious=False if args.no_reject else None)
     summary = {"equilibrium": eq.summary(), "spectrum": spec.summary(args.show)}
@@ -71,10 +72,13 @@ def run(args):
         print(eq.message)
         print(spec.message)
         ev = spec.eigenvalues[: args.show]
-        print(f"  {'i':>4} {'lambda':>22}")
-        for i, lam in enumerate(ev):
+        print(f"  {'i':>4} {'lambda':>22} {'error':>9}")
+        for i, (lam, err, kern) in enumerate(zip(ev, spec.errors, spec.is_kernel)):
             lam_s = f"{lam:.12g}" if np.isrealobj(ev) else f"{lam.real:.8g}{lam.imag:+.3g}i"
-            print(f"  {i:>4} {lam_s:>22}")
+            print(f"  {i:>4} {lam_s:>22} {err:9.1e}{'  kernel' if kern else ''}")
+        if spec.unresolved.size:
+            print(f"  unresolved (not eigenvalues to rtol = {spec.rtol:g}): "
+                  f"{np.array2string(np.real(spec.unresolved[:args.show]), precision=4)}")
         k = spec.kernel
         print(f"  kernel: dim {k.kernel_dimension} (expected {k.expected_kernel_dimension}), "
               f"|L(grad_s kappa, 0)| rel {k.lagrange_kernel:.1e}, "

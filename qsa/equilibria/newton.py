@@ -280,10 +280,10 @@ def _natural_test(system, fac, Ft, x, scale, size, t) -> bool:
 
 def _params(energy, curve, Lambda, constraints=(), mu=()):
     params = {"L": curve.length(), "A": curve.area()}
-    for t in energy.terms():
-        for name in ("alpha", "kstar", "eps", "beta", "L_star", "p"):
-            v = getattr(t, name, None)
-            if isinstance(v, (int, float)) and name not in params:
+    for t in energy.terms():  # every term's scalar parameters (the first term's win)
+        for name, v in t.params().items():
+            if (isinstance(v, (int, float)) and not isinstance(v, bool)
+                    and name not in params):
                 params[name] = float(v)
     if "beta" in params and "L_star" in params:
         params["nu2"] = params["beta"] * (params["L"] - params["L_star"])

@@ -186,6 +186,16 @@ def test_line_search_keeps_faceting_step_counts():
     assert r.success and r.n_newton <= 6
 
 
+def test_params_record_every_scalar_parameter_of_the_energy():
+    energy, guess = _functionalized_off_family(4, Fourier(101))
+    r = polish(energy, guess)
+    p = r.params
+    assert (p["alpha"], p["eta"], p["kstar"], p["beta"]) == (0.2, 1.0, K, 5.0)
+    assert p["L_star"] == energy.terms()[1].L_star
+    assert p["nu2"] == pytest.approx(5.0 * (r.curve.length() - p["L_star"]), rel=1e-12)
+    assert all(isinstance(v, float) for v in p.values())
+
+
 def test_polish_never_returns_a_worse_state_than_its_guess():
     energy, guess = _functionalized_off_family(3, Fourier(101))
     r = polish(energy, guess, maxiter=1)
