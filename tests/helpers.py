@@ -4,14 +4,15 @@ reference runs used by several test modules (no test module imports another)."""
 import math
 import os
 import time
+from dataclasses import replace
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from qsa import Curve, Fourier
 from qsa.energies import FirstOrderEnergy, SecondOrderEnergy
-from qsa.flows import CHA, solve_flow
-from qsa.paper import CONVERGENCE
+from qsa.flows import CHA, FacetingFlow, solve_flow
+from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
 from qsa.studies import npulse_study
 
@@ -239,3 +240,51 @@ def slow_study(n_pulses=3, alpha=0.1, delay=0.0):
     out = npulse_study(n_pulses=n_pulses, alpha=alpha)
     out["pid"] = os.getpid()
     return out
+
+
+def smooth_curve(N, scale=1.3, shift=0.05):
+    """Equal-chord nodes of a smooth non-symmetric curve (no symmetry left)."""
+    th = 2 * np.pi * np.arange(1000) / 1000
+    r = 1 + 0.1 * np.cos(3 * th) + 0.05 * np.sin(2 * th)
+    x, y, _ = resample_closed(scale * r * np.cos(th) + shift, scale * r * np.sin(th), N,
+                              method="chord")
+    return x, y
+
+
+class SexticWell:
+    """A user well (not the quartic default) to exercise the ``well=`` path."""
+
+    def W(self, k):
+        return 0.25 * k**2 * (k - 2.0) ** 2 + 0.01 * k**6
+
+    def dW(self, k):
+        return 0.5 * k * (k - 2.0) * (2 * k - 2.0) + 0.06 * k**5
+
+    def d2W(self, k):
+        return 0.5 * (6 * k**2 - 12 * k + 4.0) + 0.3 * k**4
+
+
+#: The DAE flow models the flow tests run (adhesion variants, faceting with a user well).
+FLOW_MODELS = {
+    "cha-neighbours": CHA(**CONVERGENCE.model_params()),
+    "cha-dense": CHA(**CONVERGENCE.model_params(), adhesion_method="dense"),
+    "cha-centred-normal": CHA(**CONVERGENCE.model_params(), force_normal="centred"),
+    "cha-short-kernel": replace(CHAScenario(), l_star=0.35).model(),
+    "ch-no-adhesion": CHA(eps=0.1, beta=1.0, rho=1.5),
+    "facet": FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0),
+    "facet-user-well": FacetingFlow(alpha=0.2, kstar=2.0, beta=1.0, L_star=7.0,
+                                    well=SexticWell()),
+}
+
+
+def numerical_jacobians(sys, y, ydot, d=1e-6):
+    """Central differences ``(dF/dy, dF/dydot)`` of a DAE system's residual at ``(y, ydot)``."""
+    n = sys.size
+    Jy = np.zeros((n, n))
+    Jd = np.zeros((n, n))
+    for k in range(n):
+        e = np.zeros(n)
+        e[k] = d
+        Jy[:, k] = (sys.residual(y + e, ydot) - sys.residual(y - e, ydot)) / (2 * d)
+        Jd[:, k] = (sys.residual(y, ydot + e) - sys.residual(y, ydot - e)) / (2 * d)
+    return Jy, Jd

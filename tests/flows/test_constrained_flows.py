@@ -9,8 +9,8 @@ from qsa.energies import CanhamHelfrich
 from qsa.equilibria import polish
 from qsa.flows import CHA, FacetingFlow, solve_flow
 from qsa.flows.models.constrained import polygon_area
-from tests.flows.test_dae import MODELS, numerical_jacobians, paper_curve, smooth_curve
-from tests.helpers import fitted_order
+from tests.helpers import FLOW_MODELS as MODELS
+from tests.helpers import fitted_order, numerical_jacobians, paper_curve, smooth_curve
 
 CONSTRAINTS = {
     "length": [FixedLength()],
