@@ -25,35 +25,44 @@ The enclosed area in intrinsic variables
 ----------------------------------------
 With ``D f = int_0^s f dsigma``, ``theta = theta0 + D kappa``, ``tau = (cos theta,
 sin theta)``, ``n = (sin theta, -cos theta)`` (outward) and ``gamma = gamma0 + D tau``,
+a closed curve encloses ``A = 1/2 int gamma . n dsigma``. Off the closed manifold that
+integrand jumps at ``s = 0 == 1`` (``gamma`` and ``theta`` do not close), and a periodic
+quadrature of it is only first-order accurate there -- which the second variation sees.
+The area used here (:meth:`qsa.curve.Curve.area`) spreads the closure defects linearly
+instead: with the excess turning ``K - 2 pi`` (``K = int kappa dsigma``) removed,
+``theta_hat = theta - (K - 2 pi) s``, and ``u = g cos theta_hat``, ``v = g sin theta_hat``
+(periodic),
 
-    A(U) = 1/2 int gamma . n dsigma,
+    A(U) = 1/2 int (v~ Q u~ - u~ Q v~) ds = 1/2 sum_jk B_jk g_j g_k sin(theta_hat_j - theta_hat_k),
 
-evaluated with the grid's quadrature (:meth:`qsa.curve.Curve.area`). Its exact
-discrete derivatives follow from writing, with ``C`` the grid's cumulative-integral
-matrix (``D f = C (f g)``) and ``K = diag(w) C / 2`` (``w`` the quadrature weights),
+``u~, v~`` the mean-free parts and ``Q`` the periodic antiderivative: the area of the
+closed curve ``gamma_hat = Q (g tau_hat)``, equal to ``1/2 int gamma . n dsigma`` on closed
+curves, invariant under rotations and translations, and a smooth function of ``U``
+with periodic integrands only. Discretely, with the grid's cumulative-integral matrix
+``C`` (``D f = C (f g)``), the weights ``w`` and ``P0 = I - 1 w^T`` (mean removal),
+``B = P0^T (W C - C^T W) P0 / 2`` (``W = diag(w)``, antisymmetric), and
+``theta_hat = theta0 + C_hat (kappa g) + 2 pi s``, ``C_hat = C - s w^T``.
 
-    A = 1/2 sum_j w_j g_j (x0 sin theta_j - y0 cos theta_j)
-        + sum_jk K_jk g_j g_k sin(theta_j - theta_k),
+Exact discrete derivatives (``p = B u``, ``q = B v``):
 
-a function of ``(theta, g)``, composed with ``theta = theta0 + C (kappa g)``:
-
-* gradient (reverse mode, O(N) on finite differences): with ``b = C^T (w g n / 2)``
-  (per component) and ``a = -g (b . n) + w g (gamma . tau) / 2 = dA/dtheta``,
-  ``dA/dkappa = g C^T a`` and ``dA/dg = w (gamma . n) / 2 + tau . b + kappa C^T a``;
-  the ``<.,.>``-gradient divides both by ``dsigma = w g``;
-* Hessian: with ``Ka = K - K^T``, ``S_jk = sin(theta_j - theta_k)``,
-  ``Co_jk = cos(theta_j - theta_k)`` and ``beta = dA/dg`` at fixed ``theta``,
-  ``A_thth = -diag(g beta) + diag(g) (Ka o S) diag(g)``, ``A_thg = diag(a / g) +
-  diag(g) (Ka o Co)``, ``A_gg = Ka o S``; with ``T = dtheta/dU = [C diag(g), C diag(kappa)]``
-  and ``E_g = [0, I]``, the Euclidean Hessian is
-  ``T^T A_thth T + T^T A_thg E_g + E_g^T A_thg^T T + E_g^T A_gg E_g``
-  ``+ [[0, diag(C^T a)], [diag(C^T a), 0]]`` (the last term from the product
-  ``kappa g`` inside ``theta``), and the ``<.,.>``-Hessian is ``W2^{-1}`` times it,
+* gradient, O(N) on finite differences: ``a = dA/dtheta_hat = g (cos theta_hat p +
+  sin theta_hat q)``, ``beta = dA/dg`` at fixed ``theta_hat`` ``= sin theta_hat p -
+  cos theta_hat q``; ``dA/dkappa = g C_hat^T a``, ``dA/dg = beta + kappa C_hat^T a``; the
+  ``<.,.>``-gradient divides both by ``dsigma = w g``;
+* Hessian: with ``S_jk = sin(theta_hat_j - theta_hat_k)``, ``Co_jk = cos(...)``,
+  ``A_thth = -diag(g beta) + diag(g) (B o S) diag(g)``,
+  ``A_thg = diag(a / g) + diag(g) (B o Co)``, ``A_gg = B o S``; with
+  ``T = dtheta_hat/dU = C_hat [diag(g), diag(kappa)]`` and ``E_g = [0, I]`` the
+  Euclidean Hessian is ``T^T A_thth T + T^T A_thg E_g + E_g^T A_thg^T T + E_g^T A_gg E_g
+  + [[0, diag(C_hat^T a)], [diag(C_hat^T a), 0]]`` (the last term from the product
+  ``kappa g`` in ``theta_hat``), and the ``<.,.>``-Hessian is ``W2^{-1}`` times it,
   ``W2 = diag(dsigma, dsigma)``.
 
-On a closed curve the first variation along a normal motion is ``<1, V>``: the
-gradient ``nabla_I A`` maps to ``-[M-dagger nabla_I A]_1 = -1`` (the normal velocity
-of the energy ``A``), up to the discretization error of ``M-dagger``. The length
+On a closed curve the gradient is, in the continuum,
+``(-|gamma~|^2 / 2 + c0, (kappa (-|gamma~|^2 / 2 + c0) + gamma~ . n) / g)`` with
+``gamma~ = gamma - int gamma ds`` and ``c0 = int |gamma~|^2 ds / 2``: a curve moving with
+outward normal velocity ``V`` changes its area by ``<1, V>``, and
+``-[M-dagger nabla_I A]_1 = -1`` (the normal velocity of the energy ``A``). The length
 ``L = int g ds`` has ``nabla_I L = (0, 1/g)`` and ``nabla_I^2 L = 0`` exactly, and
 ``-[M-dagger nabla_I L]_1 = -kappa``.
 
@@ -86,6 +95,9 @@ __all__ = [
     "FixedArea",
     "bind_constraints",
     "constraint_normals",
+    "normal_basis",
+    "flow_multipliers",
+    "project_velocity",
     "area_gradient",
     "area_gradient_euclidean",
     "area_hessian",
@@ -95,18 +107,27 @@ __all__ = [
 
 
 # ----------------------------------------------------------------- the area
+def _apply_B(grid, x):
+    """``B x`` with ``B = P0^T (W C - C^T W) P0 / 2`` (module docstring), x of shape (N,)."""
+    w = grid.weights
+    y = x - w @ x
+    z = 0.5 * (w * grid.cumulative(y) - grid.cumulative_transpose(w * y))
+    return z - w * np.sum(z)
+
+
 def _area_parts(c: Curve):
-    """``(a, beta, b)``: ``dA/dtheta``, ``dA/dg`` at fixed ``theta``, ``b = C^T (w g n / 2)``."""
+    """``(theta_hat, a, beta)``: the periodized angle, ``dA/dtheta_hat`` and ``dA/dg``."""
     grid = c.grid
-    w, g = grid.weights, c.g
-    th = c.theta()
-    tau = np.array([np.cos(th), np.sin(th)])
-    n = np.array([np.sin(th), -np.cos(th)])
-    gam = c.positions()
-    b = grid.cumulative_transpose((0.5 * w * g * n).T).T  # (2, N)
-    a = -g * np.sum(b * n, axis=0) + 0.5 * w * g * np.sum(gam * tau, axis=0)
-    beta = 0.5 * w * np.sum(gam * n, axis=0) + np.sum(tau * b, axis=0)
-    return a, beta
+    th = c.theta() - (c.kappa @ c.dsigma - 2 * np.pi) * grid.s
+    cs, sn = np.cos(th), np.sin(th)
+    p = _apply_B(grid, c.g * cs)
+    q = _apply_B(grid, c.g * sn)
+    return th, c.g * (cs * p + sn * q), sn * p - cs * q
+
+
+def _C_hat_transpose(grid, a):
+    """``C_hat^T a = C^T a - w (s . a)``."""
+    return grid.cumulative_transpose(a) - grid.weights * (grid.s @ a)
 
 
 def area_gradient_euclidean(c: Curve) -> np.ndarray:
@@ -135,8 +156,8 @@ def area_gradient_euclidean(c: Curve) -> np.ndarray:
     >>> bool(np.isclose(fd, area_gradient_euclidean(c) @ U1, rtol=1e-8))
     True
     """
-    a, beta = _area_parts(c)
-    ca = c.grid.cumulative_transpose(a)
+    _, a, beta = _area_parts(c)
+    ca = _C_hat_transpose(c.grid, a)
     return np.concatenate([c.g * ca, beta + c.kappa * ca])
 
 
@@ -144,9 +165,8 @@ def area_gradient(c: Curve) -> np.ndarray:
     """``nabla_I A`` in ``<f, h> = int f h dsigma``: the exact gradient of the discrete area, (2N,).
 
     ``d/d delta A(U + delta U1) = <nabla_I A, U1>`` exactly for the discrete area and
-    inner product (module docstring). On a closed curve it is, up to the
-    discretization, ``(-|gamma - gamma0|^2 / 2, (-kappa |gamma - gamma0|^2 / 2 +
-    (gamma - gamma0) . n) / g)`` plus a combination of the closure gradients ``Psi_j``.
+    inner product (module docstring, which also gives its continuum form on closed
+    curves).
 
     Parameters
     ----------
@@ -200,23 +220,23 @@ def area_hessian(c: Curve) -> np.ndarray:
     """
     grid = c.grid
     N = c.N
-    w, g, k = grid.weights, c.g, c.kappa
-    th = c.theta()
-    a, beta = _area_parts(c)
+    w, g, k, s = grid.weights, c.g, c.kappa, grid.s
+    th, a, beta = _area_parts(c)
     C = grid.cumulative_matrix()
-    K = 0.5 * w[:, None] * C
-    Ka = K - K.T
+    P0 = np.eye(N) - np.outer(np.ones(N), w)
+    B = P0.T @ (0.5 * (w[:, None] * C - C.T * w[None, :])) @ P0
+    Ch = C - np.outer(s, w)
     dth = th[:, None] - th[None, :]
-    KS = Ka * np.sin(dth)
-    Att = -np.diag(g * beta) + g[:, None] * KS * g[None, :]
-    Atg = np.diag(a / g) + g[:, None] * (Ka * np.cos(dth))
-    T = np.hstack([C * g[None, :], C * k[None, :]])  # d theta / dU, (N, 2N)
+    BS = B * np.sin(dth)
+    Att = -np.diag(g * beta) + g[:, None] * BS * g[None, :]
+    Atg = np.diag(a / g) + g[:, None] * (B * np.cos(dth))
+    T = np.hstack([Ch * g[None, :], Ch * k[None, :]])  # d theta_hat / dU, (N, 2N)
     H = T.T @ (Att @ T)
     cross = T.T @ Atg  # (2N, N): the columns acting on g
     H[:, N:] += cross
     H[N:, :] += cross.T
-    H[N:, N:] += KS
-    ca = C.T @ a
+    H[N:, N:] += BS
+    ca = Ch.T @ a
     idx = np.arange(N)
     H[idx, N + idx] += ca
     H[N + idx, idx] += ca
@@ -502,3 +522,104 @@ def constraint_normals(constraints, curve: Curve) -> np.ndarray:
     [0.5, 1.0]
     """
     return np.array([con.normal_variation(curve) for con in constraints]).reshape(-1, curve.N)
+
+
+def normal_basis(constraints, curve: Curve, rtol=1e-8) -> np.ndarray:
+    """``<.,.>``-orthonormal basis of the constraints' normal variations, shape (m', N).
+
+    ``m' <= m``: dependent normals are dropped (a circle with a length and an area
+    constraint has ``n_L = kappa`` constant, parallel to ``n_A = 1``).
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint
+    curve : Curve
+    rtol : float
+        Singular values below ``rtol`` times the largest count as dependent.
+
+    Returns
+    -------
+    ndarray, shape (m', N)
+        Rows ``r`` with ``sum(r_i r_j dsigma) = delta_ij``; the ``<.,.>``-orthogonal
+        projection onto ``T = {phi : <n_c, phi> = 0}`` is ``phi - R^T (R (dsigma phi))``.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> normal_basis([FixedLength(), FixedArea()], c).shape
+    (1, 17)
+    """
+    n = constraint_normals(constraints, curve)
+    if n.shape[0] == 0:
+        return np.zeros((0, curve.N))
+    rw = np.sqrt(curve.dsigma)
+    U, sv, _ = np.linalg.svd((n * rw).T, full_matrices=False)
+    keep = int(np.sum(sv > rtol * sv[0])) if sv[0] > 0 else 0
+    return (U[:, :keep] / rw[:, None]).T
+
+
+def flow_multipliers(constraints, curve: Curve, V) -> np.ndarray:
+    """The multipliers ``mu`` of the constrained gradient flow: ``<n_i, V + mu . n> = 0``, (m,).
+
+    ``V + sum_i mu_i n_i`` is the ``<.,.>``-orthogonal projection of ``V`` onto
+    ``T = {phi : <n_i, phi> = 0}`` (``mu`` minimises ``|V + mu . n|``): the normal velocity
+    that conserves every constraint (``d/dt c_i = <n_i, V + mu . n> = 0``). At an
+    equilibrium these are the Lagrange multipliers of the module docstring. A
+    degenerate set of normals (a circle with both constraints: ``kappa`` is constant)
+    is handled by least squares.
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint
+    curve : Curve
+    V : ndarray, shape (N,)
+        Outward normal velocity of the energy.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(9))
+    >>> flow_multipliers([FixedArea()], c, np.full(9, 0.25)).round(12).tolist()
+    [-0.25]
+    """
+    n = constraint_normals(constraints, curve)
+    if n.shape[0] == 0:
+        return np.zeros(0)
+    w = curve.dsigma
+    G = (n * w) @ n.T
+    return -np.linalg.lstsq(G, (n * w) @ np.asarray(V, dtype=float), rcond=1e-12)[0]
+
+
+def project_velocity(constraints, curve: Curve, V) -> np.ndarray:
+    """``V + mu . n`` with the :func:`flow_multipliers`: the constrained normal velocity, (N,).
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint
+    curve : Curve
+    V : ndarray, shape (N,)
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        ``<.,.>``-orthogonal to every ``n_i``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(9))
+    >>> V = project_velocity([FixedArea()], c, 1 + np.cos(2 * np.pi * c.grid.s))
+    >>> bool(abs(V @ c.dsigma) < 1e-12), bool(np.allclose(V, np.cos(2 * np.pi * c.grid.s)))
+    (True, True)
+    """
+    V = np.asarray(V, dtype=float)
+    if not constraints:
+        return V
+    return V + flow_multipliers(constraints, curve, V) @ constraint_normals(constraints, curve)

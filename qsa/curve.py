@@ -258,12 +258,24 @@ class Curve:
                          self.kappa @ self.dsigma - 2 * np.pi])
 
     def area(self) -> float:
-        """Enclosed area ``A = 1/2 int gamma . n dsigma`` (positive for counter-clockwise curves).
+        """Enclosed area (positive for counter-clockwise curves), defined off closure too.
 
-        With ``gamma = gamma0 + D tau`` and the outward normal ``n``, evaluated with the
-        grid's quadrature. It is the discrete area whose exact derivatives
-        :func:`qsa.constraints.area_gradient` and :func:`qsa.constraints.area_hessian`
-        compute; on a closed curve it does not depend on the base point ``gamma0``.
+        With the closure defects spread linearly over ``s in [0, 1)`` -- the excess
+        turning ``K - 2 pi`` (``K = int kappa dsigma``) out of ``theta``, and the mean
+        out of ``tau g`` -- the curve becomes the closed one with tangent angle
+        ``theta_hat = theta - (K - 2 pi) s`` and centred positions
+        ``gamma_hat = Q (g tau_hat)`` (``Q`` the periodic antiderivative of mean-zero
+        functions), whose area is
+
+            A = 1/2 int (v~ Q u~ - u~ Q v~) ds,
+
+        ``u~ = g cos theta_hat - mean``, ``v~ = g sin theta_hat - mean`` (the mean in
+        ``ds``). On a closed curve it is ``1/2 int gamma . n dsigma``; off closure it is a
+        smooth function of ``U`` with periodic integrands only, invariant under
+        rotations and translations (it does not see ``theta0`` or ``gamma(0)``). ``Q`` is
+        the grid's cumulative integral (spectral on Fourier grids, trapezoidal on finite
+        differences); :func:`qsa.constraints.area_gradient` and
+        :func:`qsa.constraints.area_hessian` are its exact derivatives.
 
         Returns
         -------
@@ -276,9 +288,14 @@ class Curve:
         >>> round(Curve.circle(2.0, Fourier(17), center=(1.0, -3.0)).area() / np.pi, 12)
         4.0
         """
-        x, y = self.positions()
-        th = self.theta()
-        return float(0.5 * (x * np.sin(th) - y * np.cos(th)) @ self.dsigma)
+        w = self.grid.weights
+        th = self.theta() - (self.kappa @ self.dsigma - 2 * np.pi) * self.grid.s
+        u = self.g * np.cos(th)
+        v = self.g * np.sin(th)
+        u = u - w @ u
+        v = v - w @ v
+        cu, cv = self.grid.cumulative(u), self.grid.cumulative(v)
+        return float(0.5 * ((w * v) @ cu - (w * u) @ cv))
 
     def grad_s(self, f) -> np.ndarray:
         """Surface gradient ``nabla_s f = (1/g) df/ds`` at the nodes.

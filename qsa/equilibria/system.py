@@ -56,14 +56,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from qsa.constraints import constraint_normals
+from qsa.constraints import constraint_normals, flow_multipliers
 from qsa.curve import Curve
 from qsa.discretize import FiniteDifference
 from qsa.energies.constrained import normal_velocity
 from qsa.equilibria.constraint_terms import (
     area_energy_jacobian,
     constraint_jacobian,
-    initial_multipliers,
     split_area_energies,
 )
 from qsa.geometry import laplace_s
@@ -216,11 +215,10 @@ class EquilibriumSystem:
         """Unknowns ``x = [kappa (N,), L, a (n_unfold,), mu (m,)]`` of a constant-g curve.
 
         ``a = 0``; ``mu`` (the constraints' multipliers) defaults to the projection of
-        ``V^n`` of :attr:`energy` (:func:`~qsa.equilibria.constraint_terms.initial_multipliers`).
+        ``V^n`` of :attr:`energy` (:func:`qsa.constraints.flow_multipliers`).
         """
         if mu is None:
-            mu = (initial_multipliers(self.constraints, curve,
-                                      normal_velocity(self.energy, curve))
+            mu = (flow_multipliers(self.constraints, curve, normal_velocity(self.energy, curve))
                   if self.m else np.zeros(0))
         return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold),
                                np.asarray(mu, dtype=float).reshape(self.m)])

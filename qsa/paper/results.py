@@ -21,7 +21,8 @@ from qsa.flows.analysis import SheetPairs
 from qsa.io import json_default
 from qsa.paper.scenarios import CHAScenario, FacetScenario
 
-__all__ = ["CoarseningEvent", "Coarsening", "coarsening_events", "FacetState", "FacetRun",
+__all__ = ["CoarseningEvent", "Coarsening", "coarsening_events", "FigureRow", "Plateau",
+           "FacetState", "FacetRun",
            "Crossing", "SelfIntersectionReport", "CHARun", "FoldingRun", "ResolutionCheck"]
 
 
@@ -79,6 +80,38 @@ def coarsening_events(t, counts):
             events.append(CoarseningEvent(float(ti), low, int(c)))
             low = int(c)
     return Coarsening(peak, float(t[k]), events)
+
+
+class FigureRow(NamedTuple):
+    """qsa's values at one of the paper's figure times, next to the paper's.
+
+    ``paper_t`` is the time printed in the paper (its clock), ``t`` the physical time
+    (``paper_clock`` times it); ``fronts``, ``R_kappa``, ``energy`` qsa's at the step
+    nearest ``t``; ``paper_fronts`` and ``paper_R_kappa`` what the paper states there
+    (None where its text gives nothing).
+    """
+
+    paper_t: float
+    t: float
+    fronts: int
+    R_kappa: float
+    energy: float
+    paper_fronts: int | None
+    paper_R_kappa: float | None
+
+
+class Plateau(NamedTuple):
+    """A stretch between coarsening events: its times, front count and residual.
+
+    ``R_kappa`` is the median of the functional residual over the middle 60% of the
+    stretch (away from the events' excursions), ``R_kappa_min`` its minimum there.
+    """
+
+    t_start: float
+    t_end: float
+    fronts: int
+    R_kappa: float
+    R_kappa_min: float
 
 
 @dataclass(frozen=True)
@@ -188,9 +221,46 @@ class FacetRun(_Summarised):
 
     @property
     def rotation_defect_at(self):
-        """``{f"{t:g}": defect}`` at the snapshots nearest the figure times reached."""
+        """``{f"{t:g}": defect}`` at the snapshots nearest the (physical) figure times reached."""
         return {f"{t:g}": self.snapshots[_index_of(self.snap_t, t)].rotation_defect
-                for t in self.scenario.figure_times if t <= self.snap_t[-1] * (1 + 1e-9)}
+                for t in self.scenario.physical_figure_times
+                if t <= self.snap_t[-1] * (1 + 1e-9)}
+
+    @property
+    def figure_rows(self):
+        """:class:`FigureRow` at each of the paper's figure times reached.
+
+        The paper's text gives 18 fronts at its first panel (t = 2.2e-4), the
+        triangle (6 fronts) at its last (t = 2) and ``R_kappa ~ 1e-3`` from
+        t = 2e-4 on, between the events' excursions.
+        """
+        sc, rows = self.scenario, []
+        times = sc.figure_times
+        for k, (tp, t) in enumerate(zip(times, sc.physical_figure_times, strict=True)):
+            if t > self.t_reached * (1 + 1e-9):
+                continue
+            i = _index_of(self.t, t)
+            paper_fronts = 18 if k == 0 else 6 if k == len(times) - 1 else None
+            rows.append(FigureRow(float(tp), float(t), int(self.fronts[i]),
+                                  float(self.R_kappa[i]), float(self.energy[i]),
+                                  paper_fronts, 1e-3 if tp >= 2e-4 else None))
+        return rows
+
+    @property
+    def plateaus(self):
+        """:class:`Plateau` between successive events (from the peak front count on)."""
+        c = self.coarsening
+        if not np.isfinite(c.t_peak):
+            return []
+        ends = [c.t_peak] + [e.t for e in c.events] + [self.t_reached]
+        out = []
+        for a, b in zip(ends[:-1], ends[1:], strict=True):
+            m = (self.t > a + 0.2 * (b - a)) & (self.t < b - 0.2 * (b - a))
+            if np.any(m):
+                out.append(Plateau(float(a), float(b), int(np.median(self.fronts[m])),
+                                   float(np.median(self.R_kappa[m])),
+                                   float(np.min(self.R_kappa[m]))))
+        return out
 
     @property
     def final_energy(self):
@@ -224,6 +294,8 @@ class FacetRun(_Summarised):
             "final_facet_spread": final.facet_spread,
             "final_R_kappa": final.R_kappa,
             "rotation_defect_at": self.rotation_defect_at,
+            "figure_rows": [r._asdict() for r in self.figure_rows],
+            "plateaus": [p._asdict() for p in self.plateaus],
             "final_energy": self.final_energy,
             "energy_max_increase": self.energy_max_increase,
             "energy_n_increases": self.energy_n_increases,
@@ -231,7 +303,9 @@ class FacetRun(_Summarised):
             "wall_seconds": self.wall_seconds,
             "checkpoint": self.checkpoint,
             "paper": {"fronts": "18 -> 6", "events": 6, "symmetry_target": 1e-3,
-                      "figure_times": list(sc.figure_times), "R_kappa_between_events": 1e-3},
+                      "figure_times": list(sc.figure_times),
+                      "physical_figure_times": list(sc.physical_figure_times),
+                      "R_kappa_between_events": 1e-3},
         }
 
     def arrays(self):

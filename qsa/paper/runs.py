@@ -82,8 +82,8 @@ def _facet_state(system, y, kstar, band):
 
 
 def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=None,
-              band=None, spinodal_time=1e-4, spinodal_step=2e-6, n_snapshots=40,
-              checkpoint_interval=10.0):
+              band=None, spinodal_time=None, spinodal_step=2e-6, n_snapshots=40,
+              checkpoint_interval=10.0, callback=None):
     """Faceting coarsening (f:facet, f:facet_energy).
 
     Parameters
@@ -102,12 +102,15 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
     band : float, optional
         Hysteresis half-width of the front count (default ``0.1 kstar``).
     spinodal_time, spinodal_step : float
-        The first phase ``[0, spinodal_time]`` is integrated with steps
-        ``<= spinodal_step`` (see the module notes); ``spinodal_time = 0``
-        skips it.
+        The first phase ``[0, spinodal_time]`` (default the scenario's) is
+        integrated with steps ``<= spinodal_step`` (see the module notes);
+        ``spinodal_time = 0`` skips it.
     n_snapshots : int
         Log-spaced snapshots kept for the symmetry history (plus the figure
         times).
+    callback : callable, optional
+        ``callback(t, y, system)`` after every accepted step of both phases (``t``
+        on the run's clock), e.g. to record the states.
 
     Returns
     -------
@@ -120,6 +123,7 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
     sc = FacetScenario() if scenario is None else scenario
     t_final = sc.t_final if t_final is None else float(t_final)
     band = 0.1 * sc.kstar if band is None else float(band)
+    spinodal_time = sc.spinodal_time if spinodal_time is None else float(spinodal_time)
     model = sc.model()
     wall0 = time.perf_counter()
     ck = None if out is None else os.path.join(out, "facet_checkpoint.npz")
@@ -130,9 +134,12 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
         u = system.unpack(y)
         series.append(t, fronts=count_fronts(u["kappa"], sc.kstar / 2, band),
                       R_kappa=functional_residual(u["mu"]), energy=system.energy(y))
+        if callback is not None:
+            callback(t, y, system)
 
     snaps = np.union1d(np.geomspace(min(spinodal_time or 1e-4, t_final) / 10, t_final,
-                                    n_snapshots), [t for t in sc.figure_times if t <= t_final])
+                                    n_snapshots),
+                         [t for t in sc.physical_figure_times if t <= t_final])
     # the capped phase never takes the whole run (stage 2 needs a positive length)
     t1 = spinodal_time if spinodal_time < t_final else 0.5 * t_final
     stage1 = None
@@ -151,7 +158,8 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
         first = model.setup(x0, y0)
         observe(0.0, first.y0, first)
         if t1 > 0:
-            res1 = solve_flow(model, start, t1, N=sc.N, tol=sc.tol, first_step=spinodal_step,
+            res1 = solve_flow(model, start, t1, N=sc.N, tol=sc.tol, method=sc.method,
+                              first_step=spinodal_step,
                               max_step=spinodal_step, t_eval=snaps[snaps <= t1],
                               progress=progress, callback=lambda t, y, s: observe(t, y, s))
             if not res1.success:
@@ -164,7 +172,7 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
         else:
             t1 = 0.0
     later = snaps[snaps > t1] - t1
-    res2 = solve_flow(model, start, t_final - t1, N=sc.N, tol=sc.tol,
+    res2 = solve_flow(model, start, t_final - t1, N=sc.N, tol=sc.tol, method=sc.method,
                       t_eval=later if later.size else None, checkpoint=ck,
                       resume=ck if resuming else None, progress=progress,
                       checkpoint_interval=checkpoint_interval,
