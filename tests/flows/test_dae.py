@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from scipy.sparse.linalg import splu
 
+from qsa.energies import FunctionalizedCurvature, Perimeter
 from qsa.flows.base import DAESystem, FlowModel
-from qsa.flows.dae import CHA, FacetingFlow
+from qsa.flows.dae import CHA, FacetingFlow, SecondOrderFlow
 from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
 
@@ -60,6 +61,8 @@ MODELS = {
     "facet": FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0),
     "facet-user-well": FacetingFlow(alpha=0.2, kstar=2.0, beta=1.0, L_star=7.0,
                                     well=SexticWell()),
+    "second-order": SecondOrderFlow(FunctionalizedCurvature(0.3, 1.0, 2.0)
+                                    + Perimeter(5.0, 6.0)),
 }
 
 
@@ -116,8 +119,9 @@ def test_adhesion_jacobian_near_contact():
     assert np.count_nonzero(J[rows, : 2 * N]) > 2 * N * 8
 
 
-def test_jacobian_nonzeros_are_linear_in_N():
-    model = MODELS["facet"]
+@pytest.mark.parametrize("name", ["facet", "second-order"])
+def test_jacobian_nonzeros_are_linear_in_N(name):
+    model = MODELS[name]
     nnz = []
     for N in (100, 200, 400):
         sys = model.setup(*smooth_curve(N))
@@ -360,7 +364,7 @@ def test_neighbour_list_model_matches_dense_model_table_T1_kernel():
     assert nb.energy(yy) == pytest.approx(de.energy(yy), rel=1e-12)
 
 
-@pytest.mark.parametrize("name", ["cha-neighbours", "facet"])
+@pytest.mark.parametrize("name", ["cha-neighbours", "facet", "second-order"])
 def test_jacobian_is_canonical_csc(name):
     sys = MODELS[name].setup(*smooth_curve(40))
     for _ in range(2):  # the second call reuses the cached pattern

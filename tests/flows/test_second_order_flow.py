@@ -65,17 +65,6 @@ def test_jacobian_matches_central_differences(name):
     assert np.max(np.abs(J[rows, -1] - Jy[rows, -1])) <= 1e-6 * np.max(np.abs(Jy[rows, -1]))
 
 
-def test_jacobian_nonzeros_are_linear_in_N():
-    model = MODELS["functionalized"]
-    nnz = []
-    for N in (100, 200, 400):
-        sys = model.setup(*smooth_curve(N))
-        nnz.append(sys.jacobian(sys.y0, np.zeros(sys.size), 1.0).nnz)
-    assert nnz[1] / nnz[0] == pytest.approx(2.0, rel=0.02)
-    assert nnz[2] / nnz[1] == pytest.approx(2.0, rel=0.02)
-    assert nnz[0] < 50 * 100
-
-
 def test_faceting_energy_gives_the_faceting_flow():
     x, y = smooth_curve(64)
     a = MODELS["faceting"].setup(x, y)
