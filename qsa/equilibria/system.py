@@ -48,7 +48,9 @@ in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``, ::
 exact derivatives of the grid's quadrature of ``C`` with ``theta = theta0 + D kappa``.
 Finite-difference grids give a sparse ``N x N`` block bordered by 4 dense
 rows and columns (:func:`assemble_jacobian`), factored by sparse LU: O(N) per Newton
-step.
+step. Two-point energies (whose ``V^n`` is evaluated from the node positions) are
+differentiated through the positions instead, which become extra sparse unknowns on
+finite-difference grids (:mod:`qsa.equilibria.two_point_terms`).
 """
 
 from __future__ import annotations
@@ -64,6 +66,11 @@ from qsa.equilibria.constraint_terms import (
     area_energy_jacobian,
     constraint_jacobian,
     split_area_energies,
+)
+from qsa.equilibria.two_point_terms import (
+    StateBorder,
+    add_velocity_jacobians,
+    split_velocity_terms,
 )
 from qsa.geometry import laplace_s
 from qsa.linalg import SparsePlusLowRank
@@ -354,9 +361,10 @@ class EquilibriumSystem:
             Closure (phase, constraint) rows, derivatives w.r.t. kappa.
         D : ndarray (m', m)
             Their derivatives w.r.t. ``(L, a, mu)``.
-        low : list of (P, Q)
+        low : list of (P, Q) and StateBorder
             Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians and
-            area penalties).
+            area penalties) and, on finite-difference grids, the position state of
+            two-point energies (:mod:`qsa.equilibria.two_point_terms`).
         """
         energy = self.energy if energy is None else energy
         N = self.N
@@ -369,6 +377,8 @@ class EquilibriumSystem:
         diag = grid.diag
         # area energies have the exact constant V^n = -F'(A): their own derivatives
         rest, area_terms = split_area_energies(energy)
+        # two-point energies: V^n from the positions, differentiated through them
+        rest, implicit = split_velocity_terms(rest)
         low = []
         if rest is not None:
             grad = rest.gradient(c)
@@ -385,6 +395,7 @@ class EquilibriumSystem:
         else:
             A = diag(np.zeros(N))
             VL = np.zeros(N)
+        A, VL = add_velocity_jacobians(implicit, c, A, VL, low)
         low_area, VL_area = area_energy_jacobian(area_terms, c)
         if low_area is not None:
             low.append(low_area)
@@ -433,28 +444,35 @@ class EquilibriumSystem:
 
 
 def assemble_jacobian(A, B, Crows, D, low):
-    """The bordered matrix ``[[A, B, P], [Crows, D, 0], [Q^T, 0, -I]]``.
+    """The bordered matrix ``[[A, B, P, VY], [Crows, D, 0, 0], [Q^T, 0, -I, 0], [cK, cL e_1^T, 0, cY]]``.
 
     The low-rank terms ``P Q^T`` of ``A`` are unfolded into extra unknowns ``z = Q^T dx``
-    (rows ``Q^T dx - z = 0``), so the matrix stays sparse.
+    (rows ``Q^T dx - z = 0``), and implicit states
+    (:class:`~qsa.equilibria.two_point_terms.StateBorder`) into extra unknowns ``Y1``
+    with their sparse equations, so the matrix stays sparse.
 
     Parameters
     ----------
     A : matrix, shape (N, N)
     B : ndarray, shape (N, m)
+        Its first column is ``d/dL``.
     Crows : ndarray, shape (m', N)
     D : ndarray, shape (m', m)
-    low : list of (P, Q)
+    low : list of (P, Q) and StateBorder
         As returned by :meth:`EquilibriumSystem.jacobian_parts`.
 
     Returns
     -------
-    sparse CSC matrix (sparse ``A``) or ndarray, square of size ``N + m + r``
-        ``r`` the total rank of ``low`` (``m' = m`` for the square system).
+    sparse CSC matrix (sparse ``A``) or ndarray, square of size ``N + m + r + s``
+        ``r`` the total rank of the low-rank terms, ``s`` the states' size (``m' = m``
+        for the square system). The extra unknowns come last; their rows have zero
+        right-hand side.
     """
-    if low:
-        P = np.hstack([p for p, _ in low])
-        Q = np.hstack([q for _, q in low])
+    pairs = [t for t in low if not isinstance(t, StateBorder)]
+    states = [t for t in low if isinstance(t, StateBorder)]
+    if pairs:
+        P = np.hstack([p for p, _ in pairs])
+        Q = np.hstack([q for _, q in pairs])
         r = P.shape[1]
     else:
         r = 0
@@ -465,7 +483,16 @@ def assemble_jacobian(A, B, Crows, D, low):
             blocks[0].append(sp.csr_matrix(P))
             blocks[1].append(None)
             blocks.append([sp.csr_matrix(Q.T), None, -sp.identity(r)])
+        for st in states:
+            for row in blocks:
+                row.append(None)
+            blocks[0][-1] = st.VY
+            cLB = sp.csr_matrix((st.cL, (np.arange(st.size), np.zeros(st.size, dtype=int))),
+                                shape=(st.size, mB))
+            blocks.append([st.cK, cLB] + [None] * (len(blocks[0]) - 3) + [st.cY])
         return sp.bmat(blocks, format="csc")
+    if states:
+        raise ValueError("implicit-state borders need a sparse (finite-difference) Newton matrix")
     top = np.hstack([A, B] + ([P] if r else []))
     mid = np.hstack([Crows, D] + ([np.zeros((mC, r))] if r else []))
     rows = [top, mid]

@@ -30,6 +30,11 @@ rotated by ``-pi/2``, i.e. along the OUTWARD normal):
 * model rows (auxiliary fields and the normal-velocity law)
 * tangential gauge   ``h sum_j Xdot_j . t_j = 0``                      (1 row)
 
+With ``setup(x, y, constraints=[FixedLength(), FixedArea()])`` (or ``solve_flow(...,
+constraints=...)``) the flow keeps the length and/or the polygon area: one multiplier
+unknown and one algebraic row each, the velocity rows corrected by ``mu_L kappa + mu_A``
+(:mod:`qsa.flows.models.constrained`).
+
 Signs follow Conventions and errata, section 3: ``V`` is the OUTWARD normal velocity and a
 counter-clockwise circle of radius R has ``kappa = +1/R``.
 
@@ -40,7 +45,8 @@ Beyond the :class:`~qsa.flows.base.DAESystem` contract the systems offer
 **sys.bound_constants())`` rebuilds the same system, e.g. on resume),
 ``differential_rows``
 (the rows containing ``ydot``), ``time_derivative(y)`` (the consistent ``ydot``
-at a state on the constraint manifold) and, for CHA, ``adhesion_fields(y)``
+at a state on the constraint manifold; unconstrained flows), ``area(y)`` (the polygon
+area), ``constraints`` and, for CHA, ``adhesion_fields(y)``
 and ``L0``. The implementation lives in :mod:`qsa.flows.models`.
 
 Discrete energy and dissipation: with node weights ``w = L/N`` the energy is

@@ -34,7 +34,7 @@ import scipy.sparse.linalg as spla
 
 from qsa._checks import real_number
 from qsa.constraints import bind_constraints
-from qsa.curve import Curve
+from qsa.curve import Curve, check_simple
 from qsa.discretize import FiniteDifference, Fourier
 from qsa.spectra.factored import FactoredNormalOperator
 from qsa.spectra.hessian import check_input, lagrange_hessian
@@ -89,6 +89,7 @@ def check_arguments(energy, curve, k, sigma, gauge, kernel_tol, drift_tol, facto
         Naming the bad argument.
     """
     check_input(energy, curve)
+    check_simple(curve)
     _check_gauge(gauge)
     if k is not None:
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
@@ -389,7 +390,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     Raises
     ------
     ValueError
-        Bad ``energy``, ``curve``, ``gauge``, ``k``, ``sigma``, ``kernel_tol``,
+        Bad ``energy``, ``curve`` (also one that crosses or touches itself: the message
+        names the closest pair of nodes), ``gauge``, ``k``, ``sigma``, ``kernel_tol``,
         ``drift_tol``, ``factor`` or ``rtol``.
 
     Examples

@@ -84,7 +84,8 @@ def test_three_pulse_branch_fold_matches_semi_analytic():
         bracket=(0.06, 0.09, 0.12), tol=1e-10)
     eq = npulse(3, alpha, grid=Fourier(129), kstar=K, beta=BETA)
     Ls0 = eq.params["L_star"]
-    b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02), max_steps=20)
+    b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02), max_steps=20,
+                     stability=False)
     assert b.success, b.message
     assert len(b.folds) == 1
     assert b.folds[0].param == pytest.approx(res.fun, abs=1e-9)
@@ -105,7 +106,7 @@ def test_fd_fold_converges_at_order_two():
         eq = npulse(3, alpha, grid=FiniteDifference(N), kstar=K, beta=BETA)
         Ls0 = eq.params["L_star"]
         b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02),
-                         max_steps=20)
+                         max_steps=20, stability=False)
         assert len(b.folds) == 1
         errs.append(abs(b.folds[0].param - ref))
     assert np.log2(errs[0] / errs[1]) == pytest.approx(2.0, abs=0.15)
