@@ -10,8 +10,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from qsa import Curve, Fourier
-from qsa.energies import FirstOrderEnergy, SecondOrderEnergy
+from qsa.energies import FirstOrderEnergy, FunctionalizedCurvature, Perimeter, SecondOrderEnergy
 from qsa.flows import CHA, FacetingFlow, solve_flow
+from qsa.flows.dae import SecondOrderFlow
 from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
 from qsa.studies import npulse_study
@@ -274,6 +275,8 @@ FLOW_MODELS = {
     "facet": FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0),
     "facet-user-well": FacetingFlow(alpha=0.2, kstar=2.0, beta=1.0, L_star=7.0,
                                     well=SexticWell()),
+    "second-order": SecondOrderFlow(FunctionalizedCurvature(0.3, 1.0, 2.0)
+                                    + Perimeter(5.0, 6.0)),
 }
 
 

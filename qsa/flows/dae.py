@@ -1,6 +1,6 @@
 """The paper's DAE curve flows: residuals and analytic sparse Jacobians.
 
-Two models implement the :class:`~qsa.flows.base.FlowModel` contract:
+Three models implement the :class:`~qsa.flows.base.FlowModel` contract:
 
 ``CHA(eps, beta, rho, A0, l_star, a)``
     Canham-Helfrich + length penalty + adhesion-repulsion (e:CHA-Energy,
@@ -12,8 +12,14 @@ Two models implement the :class:`~qsa.flows.base.FlowModel` contract:
     ``mu = -alpha^2 Delta_s kappa + W'(kappa)`` and ``mss = Delta_s mu`` so that
     every row has a compact stencil: per node ``(x, y, kappa, mu, mss, V)``
     plus ``L``, ``6N + 1`` equations, O(N) Jacobian nonzeros.
+``SecondOrderFlow(energy)``
+    The gradient flow of any local energy (e:LIE: ``SecondOrderEnergy``,
+    ``FunctionalizedCurvature``, ``Faceting`` ...) plus ``Perimeter`` terms, with the
+    same unknowns as ``FacetingFlow``; ``mu`` and ``g d_g E`` are the energy's own exact
+    discrete gradient at ``g = L`` and the Jacobian comes from its exact Hessian
+    (:mod:`qsa.flows.models.second_order`).
 
-Both share the geometric rows (scaled arc length, ap:scaledAL, ``g = L``;
+All share the geometric rows (scaled arc length, ap:scaledAL, ``g = L``;
 ``h = 1/N``; ``D1`` the centred difference, ``D2`` the compact second
 difference, indices mod N; ``t_j = D1 X_j``, ``t^- = (t_y, -t_x)`` the tangent
 rotated by ``-pi/2``, i.e. along the OUTWARD normal):
@@ -65,9 +71,12 @@ from qsa.flows.models import (
     CurveDAE,
     FacetingFlow,
     FacetingSystem,
+    SecondOrderFlow,
+    SecondOrderSystem,
     equalize_chords,
+    flow_model,
     self_intersections,
 )
 
-__all__ = ["CHA", "FacetingFlow", "CurveDAE", "CHASystem", "FacetingSystem", "equalize_chords",
-           "self_intersections"]
+__all__ = ["CHA", "FacetingFlow", "SecondOrderFlow", "CurveDAE", "CHASystem", "FacetingSystem",
+           "SecondOrderSystem", "equalize_chords", "flow_model", "self_intersections"]

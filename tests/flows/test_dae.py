@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.sparse.linalg import splu
 
+from qsa.energies import Perimeter
 from qsa.flows.base import DAESystem, FlowModel
 from qsa.flows.dae import CHA, FacetingFlow
 from qsa.paper import CONVERGENCE, CHAScenario
@@ -66,8 +67,9 @@ def test_adhesion_jacobian_near_contact():
     assert np.count_nonzero(J[rows, : 2 * N]) > 2 * N * 8
 
 
-def test_jacobian_nonzeros_are_linear_in_N():
-    model = MODELS["facet"]
+@pytest.mark.parametrize("name", ["facet", "second-order"])
+def test_jacobian_nonzeros_are_linear_in_N(name):
+    model = MODELS[name]
     nnz = []
     for N in (100, 200, 400):
         sys = model.setup(*smooth_curve(N))
@@ -310,7 +312,7 @@ def test_neighbour_list_model_matches_dense_model_table_T1_kernel():
     assert nb.energy(yy) == pytest.approx(de.energy(yy), rel=1e-12)
 
 
-@pytest.mark.parametrize("name", ["cha-neighbours", "facet"])
+@pytest.mark.parametrize("name", ["cha-neighbours", "facet", "second-order"])
 def test_jacobian_is_canonical_csc(name):
     sys = MODELS[name].setup(*smooth_curve(40))
     for _ in range(2):  # the second call reuses the cached pattern
@@ -348,7 +350,7 @@ def test_normal_velocity_agrees_with_curve_energies(which):
     # spectral (Fourier) curve through the same shape. The DAE's V converges to it at
     # second order (equal-chord nodes vs equal arc length nodes also differ at O(h^2)).
     from qsa import Curve, Fourier
-    from qsa.energies import CanhamHelfrich, Faceting, Perimeter
+    from qsa.energies import CanhamHelfrich, Faceting
 
     def rfun(t):
         return 1.3 * (1 + 0.1 * np.cos(3 * t) + 0.05 * np.sin(2 * t))
