@@ -21,9 +21,13 @@ from qsa.equilibria import npulse, polish
 from qsa.flows import FacetingFlow, SecondOrderFlow, flow_model, solve_flow
 from qsa.flows.solve import MESSAGES
 from qsa.studies import mode_amplitude, mode_decay
-from tests.energies.test_second_order import coupled_second_order
-from tests.flows.test_dae import numerical_jacobians, smooth_curve
-from tests.helpers import assert_status_convention, fitted_order
+from tests.helpers import (
+    assert_status_convention,
+    coupled_second_order,
+    fitted_order,
+    numerical_jacobians,
+    smooth_curve,
+)
 
 FC = FunctionalizedCurvature
 MODELS = {
