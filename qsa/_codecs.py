@@ -198,7 +198,7 @@ def decode_spectrum(arrays, meta):
 
 # ------------------------------------------------------------------------- flows
 def model_from_metadata(meta):
-    """The flow model (``CHA`` or ``FacetingFlow``) of ``system.metadata()``.
+    """The flow model (``CHA``, ``FacetingFlow``, ``SecondOrderFlow``) of ``system.metadata()``.
 
     Raises
     ------
@@ -220,6 +220,14 @@ def model_from_metadata(meta):
                              "from its file (only the default double well can)")
         return FacetingFlow(alpha=meta["alpha"], kstar=meta["kstar"], beta=meta["beta"],
                             L_star=meta["L_star"])
+    if name == "SecondOrderFlow":
+        from qsa.flows import SecondOrderFlow
+
+        energy = energy_from_params(meta["energy"])
+        if "energy_repr" in meta and repr(energy) != meta["energy_repr"]:
+            raise ValueError(f"the energy {meta['energy_repr']} cannot be rebuilt from its "
+                             "parameters (only energies its parameters describe can)")
+        return SecondOrderFlow(energy)
     raise ValueError(f"unknown flow model {name!r}")
 
 

@@ -94,6 +94,7 @@ __all__ = [
     "FixedLength",
     "FixedArea",
     "bind_constraints",
+    "check_constraints",
     "constraint_normals",
     "normal_basis",
     "flow_multipliers",
@@ -447,6 +448,60 @@ class FixedArea(Constraint):
         return np.ones(c.N)
 
 
+def check_constraints(constraints) -> tuple:
+    """Validate a list of constraints (without binding them); ``None`` is no constraint.
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint, a Constraint, or None
+        Entries may also be the dicts of :meth:`Constraint.params` (as stored in files).
+
+    Returns
+    -------
+    tuple of Constraint
+
+    Raises
+    ------
+    ValueError
+        An entry that is not a :class:`Constraint`, or the same kind twice.
+
+    Examples
+    --------
+    >>> check_constraints([{"constraint": "FixedArea", "A": 2.0}])
+    (FixedArea(A=2.0),)
+    >>> check_constraints([FixedLength(), FixedLength(6.0)])
+    Traceback (most recent call last):
+    ...
+    ValueError: constraints: FixedLength is given twice; pass each constraint at most once
+    """
+    if constraints is None:
+        return ()
+    if isinstance(constraints, (Constraint, dict)):
+        constraints = (constraints,)
+    try:
+        items = tuple(constraints)
+    except TypeError:
+        raise ValueError("constraints must be a list of FixedLength() / FixedArea(), "
+                         f"got {type(constraints).__name__}") from None
+    kinds = {"FixedLength": FixedLength, "FixedArea": FixedArea}
+    seen = set()
+    out = []
+    for con in items:
+        if isinstance(con, dict) and con.get("constraint") in kinds:
+            cls = kinds[con["constraint"]]
+            con = cls(con.get(cls._field))
+        if not isinstance(con, Constraint):
+            raise ValueError("constraints must contain qsa.constraints.FixedLength / FixedArea "
+                             f"objects, got {type(con).__name__}")
+        kind = type(con).__name__
+        if kind in seen:
+            raise ValueError(f"constraints: {kind} is given twice; pass each constraint at "
+                             "most once")
+        seen.add(kind)
+        out.append(con)
+    return tuple(out)
+
+
 def bind_constraints(constraints, curve: Curve) -> tuple:
     """Validate ``constraints`` and bind each to ``curve`` (``None`` targets -> its values).
 
@@ -464,7 +519,7 @@ def bind_constraints(constraints, curve: Curve) -> tuple:
     Raises
     ------
     ValueError
-        An entry that is not a :class:`Constraint`, or the same kind twice.
+        See :func:`check_constraints`.
 
     Examples
     --------
@@ -472,33 +527,8 @@ def bind_constraints(constraints, curve: Curve) -> tuple:
     >>> c = Curve.circle(1.0, Fourier(17))
     >>> [type(k).__name__ for k in bind_constraints([FixedArea(), FixedLength()], c)]
     ['FixedArea', 'FixedLength']
-    >>> bind_constraints([FixedLength(), FixedLength(6.0)], c)
-    Traceback (most recent call last):
-    ...
-    ValueError: constraints: FixedLength is given twice; pass each constraint at most once
     """
-    if constraints is None:
-        return ()
-    if isinstance(constraints, Constraint):
-        constraints = (constraints,)
-    try:
-        items = tuple(constraints)
-    except TypeError:
-        raise ValueError("constraints must be a list of FixedLength() / FixedArea(), "
-                         f"got {type(constraints).__name__}") from None
-    seen = set()
-    out = []
-    for con in items:
-        if not isinstance(con, Constraint):
-            raise ValueError("constraints must contain qsa.constraints.FixedLength / FixedArea "
-                             f"objects, got {type(con).__name__}")
-        kind = type(con).__name__
-        if kind in seen:
-            raise ValueError(f"constraints: {kind} is given twice; pass each constraint at "
-                             "most once")
-        seen.add(kind)
-        out.append(con.bind(curve))
-    return tuple(out)
+    return tuple(con.bind(curve) for con in check_constraints(constraints))
 
 
 def constraint_normals(constraints, curve: Curve) -> np.ndarray:

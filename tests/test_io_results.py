@@ -131,6 +131,24 @@ def test_faceting_flow_result_round_trip(tmp_path):
     assert_same_flow(res, load(save_flow_result(tmp_path / "f.npz", res)))
 
 
+def test_second_order_and_constrained_flow_results_round_trip(tmp_path):
+    from qsa.constraints import FixedArea
+    from qsa.energies import Faceting, Perimeter
+    from qsa.flows import SecondOrderFlow
+
+    th = 2 * np.pi * np.arange(300) / 300
+    r = 1 + 0.05 * np.cos(5 * th)
+    xy = (r * np.cos(th), r * np.sin(th))
+    res = solve_flow(SecondOrderFlow(Faceting(0.3, 2.0) + Perimeter(5.0, 7.0)), xy, 2e-4,
+                     N=48, tol=1e-3)
+    assert_same_flow(res, load(save_flow_result(tmp_path / "s.npz", res)))
+    res = solve_flow(FacetingFlow(0.3, 2.0, 5.0, 7.0), xy, 2e-4, N=48, tol=1e-3,
+                     constraints=[FixedArea()])
+    back = load(save_flow_result(tmp_path / "a.npz", res))
+    assert_same_flow(res, back)
+    assert back.system.bound_constants() == res.system.bound_constants()
+
+
 def test_files_get_the_umask_and_replaced_files_keep_their_mode(tmp_path):
     old = os.umask(0o022)
     try:

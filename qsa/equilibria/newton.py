@@ -127,6 +127,32 @@ def _at_floor(system, x, F, scale, tol, floor):
     return bool(np.all(parts <= np.maximum(tol, 100 * floor)))
 
 
+def at_round_off_floor(system, x, F, scale, tol, energy=None) -> bool:
+    """Whether the residual ``F`` at ``x`` is as small as rounding lets it be.
+
+    Every part of :meth:`EquilibriumSystem.scaled_parts` is below ``max(tol, 100 x``
+    its change under a perturbation of ``x`` by one rounding unit``)``: the test by
+    which :func:`newton_solve` reports status 1 (converged to the round-off floor), for
+    solvers that run their own Newton iteration (the continuation's corrector).
+
+    Parameters
+    ----------
+    system : EquilibriumSystem
+    x : ndarray, shape (system.size,)
+    F : ndarray, shape (system.size,)
+        ``system.residual(x, energy)``.
+    scale : float
+        :func:`residual_scale` at ``x``.
+    tol : float
+    energy : Energy, optional
+
+    Returns
+    -------
+    bool
+    """
+    return _at_floor(system, x, F, scale, tol, _noise_floor(system, x, scale, energy))
+
+
 def _check_curve(energy, curve):
     if not isinstance(curve, Curve):
         raise ValueError(f"curve must be a qsa Curve, got {type(curve).__name__}")

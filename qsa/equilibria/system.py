@@ -60,7 +60,6 @@ import scipy.sparse as sp
 
 from qsa.constraints import constraint_normals, flow_multipliers
 from qsa.curve import Curve
-from qsa.discretize import FiniteDifference
 from qsa.energies.constrained import normal_velocity
 from qsa.equilibria.constraint_terms import (
     area_energy_jacobian,
@@ -76,21 +75,6 @@ from qsa.geometry import laplace_s
 from qsa.linalg import SparsePlusLowRank
 
 __all__ = ["EquilibriumSystem", "assemble_jacobian", "equal_arclength"]
-
-
-def _cumulative_transpose(grid, v, Cmat=None):
-    """``C^T v`` for the grid's cumulative-integral matrix ``C`` (``C f = cumulative(f)``)."""
-    v = np.asarray(v, dtype=float)
-    if Cmat is not None:
-        return Cmat.T @ v
-    if isinstance(grid, FiniteDifference):
-        # trapezoid: (C f)_i = h sum_{j<i} (f_j + f_{j+1})/2
-        h = grid.h
-        tail = np.concatenate([np.cumsum(v[::-1])[::-1][1:], [0.0]])  # sum_{i>k} v_i
-        out = h * (tail + 0.5 * v)
-        out[0] = 0.5 * h * tail[0]
-        return out
-    return grid.cumulative_matrix().T @ v
 
 
 def _blocks(H, N):
@@ -214,7 +198,6 @@ class EquilibriumSystem:
             self.phase = w * dk / np.linalg.norm(w * dk)
             self.phase_value = float(self.phase @ c.kappa)
         self.n_unfold = self.phi.shape[0]
-        self._Cmat = None if self.grid.sparse else self.grid.cumulative_matrix()
         self.size = N + 1 + self.n_unfold + self.m
 
     # state <-> curve
@@ -411,8 +394,7 @@ class EquilibriumSystem:
         th = c.theta()
         g = c.g
         cs, sn = np.cos(th), np.sin(th)
-        Ct1 = _cumulative_transpose(grid, -w * g * sn, self._Cmat)
-        Ct2 = _cumulative_transpose(grid, w * g * cs, self._Cmat)
+        Ct1, Ct2 = grid.cumulative_transpose(np.column_stack([-w * g * sn, w * g * cs])).T
         rows = [g * Ct1, g * Ct2, w * g]
         dL = [np.sum(w * cs) + Ct1 @ k, np.sum(w * sn) + Ct2 @ k, np.sum(w * k)]
         m = B.shape[1]

@@ -23,6 +23,7 @@ exactly. A second Ctrl-C aborts at once.
 from __future__ import annotations
 
 import json
+import inspect
 import os
 import signal
 import sys
@@ -34,8 +35,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from qsa._checks import integer, real_number
+from qsa.constraints import check_constraints
 from qsa._version import __version__
 from qsa.curve import Curve
+from qsa.flows.models.constrained import polygon_area
 from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
 from qsa.io import load_npz, save_npz
 from qsa.polygon import self_intersections
@@ -148,6 +151,10 @@ class FlowResult:
         """Node positions ``(x, y)`` of snapshot ``i``."""
         return self.system.positions(self.states[i])
 
+    def areas(self) -> np.ndarray:
+        """Polygon areas of the snapshots (conserved by a ``FixedArea`` flow), shape (n,)."""
+        return np.array([polygon_area(*self.system.positions(y)) for y in self.states])
+
     def curvature(self, i=-1):
         """Curvature unknowns of snapshot ``i``, shape (N,)."""
         return self.system.unpack(self.states[i])["kappa"].copy()
@@ -199,7 +206,7 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
                first_step=2e-5, min_step=None, max_step=None, max_steps=1_000_000,
                newton_tol=None, linear_solver="auto", reuse_factorizations=True,
                checkpoint=None, checkpoint_interval=10.0, resume=None, progress=None,
-               callback=None):
+               callback=None, constraints=None):
     """Evolve a closed curve by a DAE flow model to ``t_final`` (physical time).
 
     Parameters
@@ -252,6 +259,12 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
     callback : callable, optional
         ``callback(t, y, system)`` after every accepted step; returning
         ``True`` stops the run (``status=1``).
+    constraints : sequence of Constraint, optional
+        ``[FixedLength()]``, ``[FixedArea()]`` or both (:mod:`qsa.constraints`): a
+        length- and/or area-preserving flow, the multipliers enforcing the constraints
+        as extra DAE unknowns (:mod:`qsa.flows.models.constrained`). ``None`` targets
+        are the initial curve's values (after resampling); a given target must equal
+        them. On resume they are read from the checkpoint.
 
     Returns
     -------
@@ -302,14 +315,24 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
             raise ValueError("t_eval must be strictly increasing within [0, t_final]")
 
     options = {"method": method, "tol": tol}
+    constraints = check_constraints(constraints)
+    if constraints and "constraints" not in inspect.signature(model.setup).parameters:
+        raise ValueError(f"constraints: the model {type(model).__name__} does not support "
+                         "length / area constraints")
     if resume is not None:
         loaded = _load_checkpoint(resume, model, options)
         x0, y0, bound = loaded["x_setup"], loaded["y_setup"], loaded["bound"]
         _check_resume(resume, loaded, N, t_final)
         system = model.setup(x0, y0, **bound)
+        saved = getattr(system, "constraints", ())
+        if constraints and not _same_constraints(constraints, saved):
+            raise ValueError("constraints: the checkpoint was written with "
+                             f"{[k.params() for k in saved]}; resume without constraints= "
+                             "(they are read from the checkpoint)")
     else:
         x0, y0 = prepare_initial(initial, N)
-        system = model.setup(x0, y0)
+        system = model.setup(x0, y0, constraints=constraints) if constraints else \
+            model.setup(x0, y0)
     index = np.union1d(system.error_index, [system.size - 1])
     newton = NewtonSolver(system, newton_tol, index, strategy=linear_solver,
                           reuse=reuse_factorizations)
@@ -386,6 +409,13 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
         n_rejected=integ.n_rejected, n_newton=newton.n_iterations,
         n_lu=newton.n_factorizations, n_newton_failures=integ.n_newton_failures,
         checkpoint=checkpoint, x=X, y=Y, method=method, tol=tol, system=system)
+
+
+def _same_constraints(given, saved) -> bool:
+    """The same kinds in the same order, and equal targets where ``given`` has one."""
+    return len(given) == len(saved) and all(
+        type(a) is type(b) and (a.target is None or a.target == b.target)
+        for a, b in zip(given, saved, strict=True))
 
 
 class _Recorder:

@@ -223,3 +223,19 @@ def test_circle_with_both_constraints_excludes_one_direction():
     s = spectrum(CanhamHelfrich(1.0), c, constraints=[FixedLength(), FixedArea()],
                  reject_spurious=False)
     assert s.success and s.eigenvalues.size == c.N - 1 and s.n_kernel == 2
+
+
+def test_pressure_balanced_circle_without_constraints():
+    """CanhamHelfrich + Pressure(p), p = -eps/(2 R^3): lambda_k = -eps (k^2-1)(k^2-3/2)/R^4.
+
+    With mu_L = 0 the pressure term alone balances bending; the second variation
+    eps (k^2-1)^2/R^4 - eps k^2/(2 R^4) + eps/(2 R^4) per unit <phi, phi> (bending, its
+    tension part eps/(2R^2) L'' and -p A''), mode 0 included (no length constraint).
+    """
+    p = -EPS / (2 * R**3)
+    s = spectrum(CanhamHelfrich(EPS) + Pressure(p), Curve.circle(R, Fourier(65)),
+                 reject_spurious=False)
+    assert s.status == 0 and s.n_kernel == 2 and s.eigenvalues.size == 65
+    k = np.array([0, 2, 2, 3, 3, 4, 4, 5, 5])
+    ref = np.sort(-EPS * (k**2 - 1) * (k**2 - 1.5) / R**4)[::-1]
+    assert np.allclose(non_kernel(s)[: ref.size], ref, rtol=1e-9)

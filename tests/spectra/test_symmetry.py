@@ -14,7 +14,7 @@ from qsa.spectra.symmetry import (
     sector_basis,
     sector_spectrum,
 )
-from tests.spectra.conftest import faceting_circle_eigenvalues
+from tests.reference.circle_spectra import faceting_circle_eigenvalues
 
 
 def test_circle_sectors_are_the_modes_of_the_closed_form():
