@@ -9,8 +9,9 @@ eigenvalues, boolean masks) and are stored without pickle; everything else
 goes to the JSON metadata. A member of a nested object is named
 ``<prefix>.<field>`` (``equilibrium.kappa``, ``kernel.rigid``).
 
-Decoding imports the result classes here (not at module top), because
-:mod:`qsa.io` is imported by the flows that these decoders rebuild.
+The low-level file functions live in :mod:`qsa.npz`, which the library's own
+layers (flows, sweeps, paper runs) use, so that this module can import the result
+classes of all of them.
 """
 
 from __future__ import annotations
@@ -19,7 +20,14 @@ import dataclasses
 
 import numpy as np
 
+from qsa import energies
 from qsa._version import __version__
+from qsa.curve import Curve
+from qsa.discretize import FiniteDifference, Fourier
+from qsa.energies import DoubleWell
+from qsa.equilibria import Equilibrium
+from qsa.flows import CHA, FacetingFlow, FlowResult, SecondOrderFlow
+from qsa.spectra import KernelReport, Spectrum
 
 __all__ = ["KIND_EQUILIBRIUM", "KIND_SPECTRUM", "KIND_FLOW_RESULT", "KIND_FLOW_CHECKPOINT",
            "encode_equilibrium", "decode_equilibrium", "encode_spectrum", "decode_spectrum",
@@ -56,10 +64,7 @@ def encode_curve(curve, prefix=""):
 
 def decode_curve(arrays, meta, prefix=""):
     """The :class:`~qsa.Curve` of :func:`encode_curve`."""
-    from qsa import discretize
-    from qsa.curve import Curve
-
-    grids = {"Fourier": discretize.Fourier, "FiniteDifference": discretize.FiniteDifference}
+    grids = {"Fourier": Fourier, "FiniteDifference": FiniteDifference}
     kind = meta["grid"]["kind"]
     if kind not in grids:
         raise ValueError(f"unknown grid {kind!r}")
@@ -87,8 +92,6 @@ def energy_from_params(params):
     >>> energy_from_params(E.params())
     Faceting(alpha=0.1, kstar=5.0) + Perimeter(beta=5.0, L_star=6.0)
     """
-    from qsa import energies
-
     name = params.get("energy")
     if name == "sum":
         terms = [energy_from_params(p) for p in params["terms"]]
@@ -167,8 +170,6 @@ def encode_equilibrium(eq, prefix=""):
 
 def decode_equilibrium(arrays, meta, prefix=""):
     """The :class:`~qsa.equilibria.Equilibrium` of :func:`encode_equilibrium`'s output."""
-    from qsa.equilibria import Equilibrium
-
     return _decode_fields(Equilibrium, arrays, meta, prefix,
                           curve=decode_curve(arrays, meta, prefix),
                           energy=energy_from_params(meta["energy"]),
@@ -190,8 +191,6 @@ def encode_spectrum(spec, eq):
 
 def decode_spectrum(arrays, meta):
     """The :class:`~qsa.spectra.Spectrum` of :func:`encode_spectrum`."""
-    from qsa.spectra import KernelReport, Spectrum
-
     kernel = _decode_fields(KernelReport, arrays, meta["kernel"], "kernel")
     return _decode_fields(Spectrum, arrays, meta["spectrum"], "", kernel=kernel)
 
@@ -205,9 +204,6 @@ def model_from_metadata(meta):
     ValueError
         An unknown model, or a faceting flow with a custom well.
     """
-    from qsa.energies import DoubleWell
-    from qsa.flows import CHA, FacetingFlow
-
     name = meta.get("model")
     if name == "CHA":
         return CHA(eps=meta["eps"], beta=meta["beta"], rho=meta["rho"], A0=meta["A0"],
@@ -221,8 +217,6 @@ def model_from_metadata(meta):
         return FacetingFlow(alpha=meta["alpha"], kstar=meta["kstar"], beta=meta["beta"],
                             L_star=meta["L_star"])
     if name == "SecondOrderFlow":
-        from qsa.flows import SecondOrderFlow
-
         energy = energy_from_params(meta["energy"])
         if "energy_repr" in meta and repr(energy) != meta["energy_repr"]:
             raise ValueError(f"the energy {meta['energy_repr']} cannot be rebuilt from its "
@@ -248,8 +242,6 @@ def encode_flow_result(res):
 
 def decode_flow_result(arrays, meta):
     """The :class:`~qsa.flows.FlowResult` of :func:`encode_flow_result`."""
-    from qsa.flows import FlowResult
-
     system = _system(meta["model"], meta.get("bound", {}), arrays["x_setup"], arrays["y_setup"])
     return _decode_fields(FlowResult, arrays, meta["result"], "", system=system)
 
@@ -261,8 +253,6 @@ def decode_flow_checkpoint(arrays, meta, path):
     state is the integrator's. ``status`` follows the checkpoint's status word
     (``running``/``interrupted``: 1, stopped before ``t_final``).
     """
-    from qsa.flows import FlowResult
-
     system = _system(meta["model"], meta.get("bound", {}), arrays["x_setup"], arrays["y_setup"])
     scal = meta["integrator"]
     t, y = float(scal["t"]), np.asarray(arrays["y"], dtype=float)

@@ -109,142 +109,14 @@ An equilibrium written and read back:
 
 from __future__ import annotations
 
-import json
 import os
-import secrets
-import zipfile
-
-import numpy as np
 
 from qsa import _codecs
 from qsa._version import __version__
+from qsa.npz import json_default, load_npz, save_npz, write_atomically
 
 __all__ = ["save_npz", "load_npz", "json_default", "write_atomically", "load",
            "load_equilibrium", "save_equilibrium", "save_spectrum", "save_flow_result"]
-
-_META = "__meta__"
-
-
-def write_atomically(path, write):
-    """Create or replace ``path`` atomically with what ``write(fh)`` writes.
-
-    The data go to a temporary file in the same folder (created with mode
-    ``0o666``, so the umask applies, or with the mode of the file it replaces),
-    are flushed to disk, then renamed over ``path``.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    write : callable
-        ``write(fh)`` with ``fh`` a binary file open for writing.
-
-    Returns
-    -------
-    str
-        The path written.
-    """
-    path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
-    try:
-        mode = os.stat(path).st_mode & 0o7777
-    except OSError:
-        mode = None
-    while True:
-        tmp = os.path.join(folder, f".{os.path.basename(path)}.{secrets.token_hex(6)}.tmp")
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-            break
-        except FileExistsError:  # pragma: no cover - a 48-bit name collision
-            continue
-    try:
-        if mode is not None:
-            os.fchmod(fd, mode)
-        with os.fdopen(fd, "wb") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-def save_npz(path, arrays, meta):
-    """Write ``arrays`` (name -> ndarray) and the JSON-serialisable ``meta`` atomically.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Target file (conventionally ``.npz``; written exactly at this path).
-    arrays : dict of str -> array_like
-        Numeric arrays (object arrays are refused: they would need pickle).
-    meta : dict
-        JSON-serialisable metadata (NumPy scalars are converted).
-
-    Returns
-    -------
-    str
-        The path written.
-    """
-    if _META in arrays:
-        raise ValueError(f"arrays: the name {_META!r} is reserved for the metadata")
-    clean = {}
-    for name, value in arrays.items():
-        a = np.asarray(value)
-        if a.dtype == object:
-            raise ValueError(f"arrays[{name!r}] has dtype object; only numeric arrays are stored")
-        clean[name] = a
-    text = json.dumps(meta, default=json_default, allow_nan=True)
-    clean[_META] = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
-    return write_atomically(path, lambda fh: np.savez(fh, **clean))
-
-
-def load_npz(path):
-    """Read a file written by :func:`save_npz`.
-
-    Returns
-    -------
-    arrays : dict of str -> ndarray
-    meta : dict
-
-    Raises
-    ------
-    ValueError
-        If the file is missing, truncated, corrupted or not written by
-        :func:`save_npz`.
-    """
-    path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise ValueError(f"{path}: no such file")
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: data[name] for name in data.files}
-    except (zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError,
-            zipfile.LargeZipFile) as exc:
-        raise ValueError(f"{path}: corrupt or truncated file ({type(exc).__name__}: {exc})") \
-            from None
-    if _META not in arrays:
-        raise ValueError(f"{path}: not a qsa file (no {_META!r} metadata member)")
-    try:
-        meta = json.loads(arrays.pop(_META).tobytes().decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: corrupt metadata ({exc})") from None
-    if not isinstance(meta, dict):
-        raise ValueError(f"{path}: corrupt metadata (not a JSON object)")
-    return arrays, meta
-
-
-def json_default(value):
-    """``json.dump(default=...)`` for NumPy scalars and arrays (anything else: TypeError)."""
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
-
 
 # ------------------------------------------------------------------ result files
 def save_equilibrium(path, equilibrium, extra_meta=None):

@@ -22,8 +22,8 @@ exactly. A second Ctrl-C aborts at once.
 
 from __future__ import annotations
 
-import json
 import inspect
+import json
 import os
 import signal
 import sys
@@ -35,12 +35,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from qsa._checks import integer, real_number
-from qsa.constraints import check_constraints
 from qsa._version import __version__
+from qsa.constraints import check_constraints
 from qsa.curve import Curve
 from qsa.flows.models.constrained import polygon_area
 from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
-from qsa.io import load_npz, save_npz
+from qsa.npz import load_npz, save_npz
 from qsa.polygon import self_intersections
 from qsa.resample import closed_samples, resample_closed
 

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from qsa.io import json_default, load_npz, save_npz
+from qsa.npz import json_default, load_npz, save_npz
 
 __all__ = ["write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
 

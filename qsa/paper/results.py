@@ -18,7 +18,7 @@ import numpy as np
 
 from qsa._version import __version__
 from qsa.flows.analysis import SheetPairs
-from qsa.io import json_default
+from qsa.npz import json_default
 from qsa.paper.scenarios import CHAScenario, FacetScenario
 
 __all__ = ["CoarseningEvent", "Coarsening", "coarsening_events", "FigureRow", "Plateau",

@@ -47,7 +47,7 @@ from qsa.flows.analysis import (
     rotation_defect,
 )
 from qsa.flows.solve import solve_flow
-from qsa.io import load_npz, save_npz
+from qsa.npz import load_npz, save_npz
 from qsa.paper._files import Series, checkpoint_nodes, checkpoint_time, write_output
 from qsa.paper.results import (
     CHARun,

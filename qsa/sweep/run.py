@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from qsa._version import __version__
-from qsa.io import write_atomically
+from qsa.npz import write_atomically
 from qsa.sweep.grid import ParameterGrid, _python, _scalar, point_key
 
 __all__ = [
