@@ -28,7 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from qsa.constraints import area_gradient_euclidean, constraint_normals
+from qsa.constraints import constraint_normals
+from qsa.measures import area_gradient_euclidean
 from qsa.curve import Curve
 from qsa.energies import AreaEnergy, EnergySum
 
