@@ -1,4 +1,4 @@
-"""The length and the enclosed area of a closed curve in intrinsic variables, with exact derivatives.
+"""The length and the enclosed area of a closed curve, intrinsic variables, exact derivatives.
 
 With ``D f = int_0^s f dsigma``, ``theta = theta0 + D kappa``, ``tau = (cos theta,
 sin theta)``, ``n = (sin theta, -cos theta)`` (outward) and ``gamma = gamma0 + D tau``,
