@@ -19,10 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from qsa.discretize import Fourier, Grid
-from qsa.polygon import polygon_self_intersects, self_intersections
+from qsa.polygon import check_simple, polygon_self_intersects, self_intersections
 from qsa.resample import PeriodicInterpolant, closed_samples, equal_arclength_parameters
 
 __all__ = ["Curve", "polygon_self_intersects", "self_intersections", "check_simple"]
@@ -590,72 +589,3 @@ class Curve:
             kappa = (z1.real * z2.imag - z1.imag * z2.real) / np.abs(z1) ** 3
         z0 = curve.derivative(t[:1])[0]
         return cls(kappa, L, grid, float(np.angle(z1[0])), (z0.real, z0.imag))
-
-
-def check_simple(c: Curve, name="curve", rel=1e-9) -> None:
-    """Raise ``ValueError`` if the node polygon of ``c`` crosses or touches itself.
-
-    A crossing is a pair of non-adjacent segments that intersect
-    (:func:`self_intersections`, touching included); a touching pair is two nodes that
-    are not neighbours along the curve yet closer than ``rel L``. The message names the
-    closest such pair by node index, parameter ``s`` and position, so the user can see
-    where the curve meets itself.
-
-    Parameters
-    ----------
-    c : Curve
-    name : str
-        The argument named in the message.
-    rel : float
-        Touching distance relative to the length ``L``.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    ValueError
-        The curve crosses or touches itself.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import Curve, Fourier
-    >>> check_simple(Curve.circle(1.0, Fourier(33)))
-    >>> twice = Curve(np.full(129, 1.0), 4 * np.pi, Fourier(129))  # a circle run round twice
-    >>> check_simple(twice)
-    Traceback (most recent call last):
-    ...
-    ValueError: curve crosses itself: segments 43 and 108 (s = 0.3333 and 0.8372) meet near ...
-    """
-    x, y = c.positions()
-    N = c.N
-    s = c.grid.s
-    cross = self_intersections(x, y)
-    if cross.shape[0]:
-        # the crossing pair whose node midpoints are closest
-        i, j = cross[:, 0], cross[:, 1]
-        mx = 0.5 * (x[i] + x[(i + 1) % N] - x[j] - x[(j + 1) % N])
-        my = 0.5 * (y[i] + y[(i + 1) % N] - y[j] - y[(j + 1) % N])
-        k = int(np.argmin(np.hypot(mx, my)))
-        a, b = int(i[k]), int(j[k])
-        px = 0.25 * (x[a] + x[(a + 1) % N] + x[b] + x[(b + 1) % N])
-        py = 0.25 * (y[a] + y[(a + 1) % N] + y[b] + y[(b + 1) % N])
-        more = f" ({cross.shape[0]} crossing pairs in all)" if cross.shape[0] > 1 else ""
-        raise ValueError(
-            f"{name} crosses itself: segments {a} and {b} (s = {s[a]:.4g} and {s[b]:.4g}) "
-            f"meet near ({px:.4g}, {py:.4g}){more}; equilibria and spectra need a simple "
-            "closed curve")
-    L = c.length()
-    pairs = cKDTree(np.column_stack([x, y])).query_pairs(rel * L, output_type="ndarray")
-    if pairs.size:
-        gap = np.abs(pairs[:, 0] - pairs[:, 1])
-        pairs = pairs[(gap > 1) & (gap < N - 1)]
-    if pairs.size:
-        d = np.hypot(x[pairs[:, 0]] - x[pairs[:, 1]], y[pairs[:, 0]] - y[pairs[:, 1]])
-        a, b = (int(v) for v in sorted(pairs[int(np.argmin(d))]))
-        raise ValueError(
-            f"{name} touches itself: nodes {a} and {b} (s = {s[a]:.4g} and {s[b]:.4g}) are "
-            f"{d.min():.3g} apart near ({x[a]:.4g}, {y[a]:.4g}); equilibria and spectra need "
-            "a simple closed curve")

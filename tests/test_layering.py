@@ -28,6 +28,7 @@ FORBIDDEN = {
     "closure": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "curve": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "discretize": {"curve", "geometry", "energies", "equilibria", "spectra", "flows"},
+    "measures": {"energies", "equilibria", "spectra", "flows", "continuation"},
     "polygon": {"discretize", "curve", "geometry", "energies", "equilibria", "spectra", "flows"},
     "plotting": set(),
 }

@@ -109,7 +109,7 @@ def report_lines(s):
                      + "; facets " + ", ".join(f"{x:.3f}" for x in f["facet_lengths"])
                      + f"; L = {f['length']:.4f}")
     lines.append(f"CPU: DAE {s['time_dae']:.1f} s, ODE {s['time_ode']:.2f} s "
-                 f"({s['nfev_ode']} evaluations)")
+                 f"({s['n_rhs_ode']} evaluations)")
     lines.append("paper: no published numbers (the reduction is new in qsa)")
     return lines
 

@@ -28,9 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from qsa.constraints import area_gradient_euclidean, constraint_normals
+from qsa.constraints import constraint_normals
 from qsa.curve import Curve
 from qsa.energies import AreaEnergy, EnergySum
+from qsa.measures import area_gradient_euclidean
 
 __all__ = ["split_area_energies", "ConstraintJacobian", "constraint_jacobian",
            "area_energy_jacobian"]

@@ -13,6 +13,14 @@ from qsa.npz import json_default, load_npz, save_npz
 __all__ = ["write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
 
 
+class _Summarised:
+    """``to_json()`` for results with a ``summary()``."""
+
+    def to_json(self, indent=2):
+        """``summary()`` as JSON text."""
+        return json.dumps(self.summary(), indent=indent, default=json_default)
+
+
 def write_output(out, name, arrays, summary):
     """Write ``<out>/<name>.npz`` (atomic, no pickle) and ``<out>/<name>.json``; return paths."""
     os.makedirs(out, exist_ok=True)

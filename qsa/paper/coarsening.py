@@ -126,7 +126,8 @@ class CoarseningComparison(_Summarised):
     t_final : float
     time_dae, time_ode : float
         CPU seconds (the DAE's whole run; the ODE's from the hand-over).
-    nfev_ode : int
+    n_rhs_ode : int
+        Evaluations of the ODE's right-hand side (``nfev_ode`` is a read-only alias).
     dae_success, ode_success : bool
     dae_message, ode_message : str
     """
@@ -153,11 +154,16 @@ class CoarseningComparison(_Summarised):
     t_final: float
     time_dae: float
     time_ode: float
-    nfev_ode: int
+    n_rhs_ode: int
     dae_success: bool
     ode_success: bool
     dae_message: str
     ode_message: str
+
+    @property
+    def nfev_ode(self) -> int:
+        """Read-only alias of :attr:`n_rhs_ode` (the former name)."""
+        return self.n_rhs_ode
 
     @property
     def same_sequence(self):
@@ -209,7 +215,7 @@ class CoarseningComparison(_Summarised):
             "max_event_rel_diff": self.max_event_rel_diff,
             "final_dae": self.final_dae.summary(), "final_ode": self.final_ode.summary(),
             "time_dae": self.time_dae, "time_ode": self.time_ode, "speedup": self.speedup,
-            "nfev_ode": self.nfev_ode, "dae_success": self.dae_success,
+            "n_rhs_ode": self.n_rhs_ode, "dae_success": self.dae_success,
             "ode_success": self.ode_success, "dae_message": self.dae_message,
             "ode_message": self.ode_message,
         }
@@ -458,7 +464,7 @@ def compare_coarsening(scenario=None, *, N=1200, method="bdf2", tol=1e-6, t_fina
         _ode_events(sol, order, t0, kinds), tracks.t, P_dae, sol.t + t0, P_ode,
         _state(rec.t[-1], tracks.positions[-1], kinds, float(rec.length[-1]), sc.kstar),
         _state(t_final, P_ode[-1], kinds, L_end, sc.kstar),
-        t_final, rec.cpu, time_ode, int(sol.nfev), rec.success, bool(sol.success),
+        t_final, rec.cpu, time_ode, int(sol.n_rhs), rec.success, bool(sol.success),
         rec.message, sol.message)
 
 

@@ -7,6 +7,9 @@
   Canham-Helfrich) and the paper-gauge regression value.
 * :mod:`tests.reference.orbits` -- mpmath (60-digit) periods of the periodic orbits of
   the front equation.
+* ``cha_trillium_equilibrium.json`` -- a CHA (adhesion) equilibrium polished on a
+  Fourier grid, the starting point of the two-point polish tests (provenance in its
+  ``description``).
 
 :func:`load` reads a JSON file; keys starting with ``_`` are provenance notes, and
 numeric keys of a table (``"50"``, ``"1e-3"``) are returned as numbers.
