@@ -1,8 +1,8 @@
 """Cost of one residual + one Newton-matrix assembly of the DAE models against N.
 
 Prints a table per model and the exponent p of a least-squares fit
-``time ~ N^p`` (targets of issue 5: p <= 1.15 for faceting, p <= 1.3 for CHA
-with the neighbour list).
+``time ~ N^p`` (targets: p <= 1.15 for faceting and for the second-order flow of
+``FunctionalizedCurvature``, p <= 1.3 for CHA with the neighbour list).
 
 For CHA the kernel width is tied to the grid (``l* = 2 L/N``), so every node
 has the same number of neighbours: this measures the algorithm, not a change of
@@ -10,7 +10,9 @@ physics. A second CHA table keeps the paper's folding kernel fixed
 (``l* = 0.01``, Table T1) over the resolved range: there the neighbours per
 node grow like N until the kernel is resolved by many nodes, and the cost with
 them. The last table is the paper's long-range kernel (``l* = 1/2``), whose
-adhesion block is dense.
+adhesion block is dense. A last table times whole short flows (``solve_flow``, BDF2)
+of the faceting energy by ``FacetingFlow`` and by the generic ``SecondOrderFlow``, and of
+``FunctionalizedCurvature`` (sixth order), per accepted step.
 
 Run: ``python benchmarks/bench_dae_models.py [--quick]``.
 """
@@ -23,7 +25,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from qsa.flows.dae import FacetingFlow, equalize_chords
+from qsa.energies import Faceting, FunctionalizedCurvature, Perimeter
+from qsa.flows import solve_flow
+from qsa.flows.dae import FacetingFlow, SecondOrderFlow, equalize_chords
 from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
 
@@ -102,6 +106,31 @@ def newton_solve_table(Ns, steps=(1e-4, 1e-3, 1e-2)):
                   f"{t_full / t_gm:>6.1f}")
 
 
+def flow_table(Ns, T=2e-3, tol=1e-5):
+    """Whole BDF2 flows from a perturbed circle: steps, Newton iterations, CPU per step."""
+    models = {
+        "FacetingFlow": lambda: FacetingFlow(alpha=0.1, kstar=5.0, beta=5.0, L_star=8.0),
+        "SecondOrderFlow(Faceting)": lambda: SecondOrderFlow(Faceting(0.1, 5.0)
+                                                             + Perimeter(5.0, 8.0)),
+        "SecondOrderFlow(FC)": lambda: SecondOrderFlow(FunctionalizedCurvature(0.1, 1.0, 5.0)
+                                                       + Perimeter(5.0, 8.0)),
+    }
+    print(f"\nsolve_flow, BDF2, t = {T:g}, tol = {tol:g}, r = 1.2 (1 + 0.05 cos 5t)")
+    print(f"{'model':>26} {'N':>6} {'steps':>6} {'newton':>7} {'LU':>5} {'cpu [s]':>8} "
+          f"{'ms/step':>8}")
+    th = 2 * np.pi * np.arange(4096) / 4096
+    r = 1.2 * (1 + 0.05 * np.cos(5 * th))
+    for name, make in models.items():
+        for N in Ns:
+            t0 = time.process_time()
+            res = solve_flow(make(), (r * np.cos(th), r * np.sin(th)), T, N=N, tol=tol,
+                             method="bdf2", progress=False)
+            cpu = time.process_time() - t0
+            print(f"{name:>26} {N:>6} {res.n_steps:>6} {res.n_newton:>7} "
+                  f"{res.n_factorizations:>5} {cpu:>8.2f} {1e3 * cpu / res.n_steps:>8.2f}"
+                  + ("" if res.success else f"  ({res.message})"))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller sweeps")
@@ -111,6 +140,9 @@ def main(argv=None):
     cha_N = [100, 300, 1000, 3000] + ([] if args.quick else [10000])
     run("FacetingFlow(alpha=0.1, kstar=5, beta=5, L_star=8)", facet_N,
         lambda N, L: FacetingFlow(alpha=0.1, kstar=5.0, beta=5.0, L_star=8.0), rep, 1.15)
+    run("SecondOrderFlow(FunctionalizedCurvature(0.1, 1, 5) + Perimeter(5, 8))", facet_N,
+        lambda N, L: SecondOrderFlow(FunctionalizedCurvature(0.1, 1.0, 5.0)
+                                     + Perimeter(5.0, 8.0)), rep, 1.15)
     run("CHA, neighbour list, l* = 2 L/N (fixed neighbours per node)", cha_N,
         lambda N, L: replace(CHAScenario(), l_star=2 * L / N).model(),
         rep, 1.3)
@@ -121,6 +153,7 @@ def main(argv=None):
         [100, 200, 400, 800],
         lambda N, L: CONVERGENCE.model(), rep)
     newton_solve_table([100, 400] if args.quick else [100, 200, 400, 800])
+    flow_table([100, 200] if args.quick else [100, 200, 400])
 
 
 if __name__ == "__main__":

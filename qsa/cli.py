@@ -5,6 +5,13 @@ Each subcommand lives in ``qsa/commands/<name>.py`` and provides
 ``run(args) -> int``. Register a new one by adding its module name to
 ``SUBCOMMANDS``. Every subcommand accepts ``--json`` (a machine-readable
 summary on stdout) and, where it draws, ``--plot FILE.png``.
+
+:func:`main` checks the path options before a subcommand starts
+(:func:`qsa.commands._options.check_paths`) and turns what the subcommand
+raises into one line on stderr and an exit code
+(:func:`qsa.commands._errors.run_command`: 0 done, 1 failure reported, 2 bad
+input, 130 interrupted, 141 output pipe closed), so every subcommand gets the
+same behaviour without code of its own.
 """
 
 from __future__ import annotations
@@ -14,15 +21,19 @@ import importlib
 import sys
 
 from qsa._version import __version__
+from qsa.commands._errors import EXIT_BROKEN_PIPE, epilog, run_command, silence_stdout
+from qsa.commands._options import CommandParser, check_paths
 
 #: Subcommand modules under ``qsa.commands``, in the order ``--help`` lists them.
 SUBCOMMANDS = ["demo", "equilibrium", "spectrum", "bifurcate", "flow", "reproduce", "sweep"]
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="qsa",
         description="Quasi-steady and spectral analysis of closed planar interfaces.",
+        epilog=epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"qsa {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -37,17 +48,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _run(args):
+    check_paths(args)
+    return args.func(args)
+
+
 def main(argv=None) -> int:
+    """Parse ``argv`` (default ``sys.argv[1:]``), run the subcommand, return the exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 0
     try:
-        return int(args.func(args) or 0)
-    except ValueError as exc:  # bad input: one clear line, no traceback
-        print(f"qsa {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 0
+    except BrokenPipeError:  # qsa --help | head
+        silence_stdout()
+        return EXIT_BROKEN_PIPE
+    except SystemExit as exc:  # a usage error (exit 2) is returned; --help, --version exit
+        if exc.code == 0:
+            raise
+        return exc.code
+    return run_command(_run, args)
 
 
 if __name__ == "__main__":  # pragma: no cover

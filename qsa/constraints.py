@@ -21,41 +21,8 @@ first variation of ``c`` when the curve moves with outward normal velocity ``V``
     ``-mu_L`` the line tension. ``None`` takes the value of the curve the
     constraint is first bound to (:func:`bind_constraints`).
 
-The enclosed area in intrinsic variables
-----------------------------------------
-With ``D f = int_0^s f dsigma``, ``theta = theta0 + D kappa``, ``tau = (cos theta,
-sin theta)``, ``n = (sin theta, -cos theta)`` (outward) and ``gamma = gamma0 + D tau``,
-
-    A(U) = 1/2 int gamma . n dsigma,
-
-evaluated with the grid's quadrature (:meth:`qsa.curve.Curve.area`). Its exact
-discrete derivatives follow from writing, with ``C`` the grid's cumulative-integral
-matrix (``D f = C (f g)``) and ``K = diag(w) C / 2`` (``w`` the quadrature weights),
-
-    A = 1/2 sum_j w_j g_j (x0 sin theta_j - y0 cos theta_j)
-        + sum_jk K_jk g_j g_k sin(theta_j - theta_k),
-
-a function of ``(theta, g)``, composed with ``theta = theta0 + C (kappa g)``:
-
-* gradient (reverse mode, O(N) on finite differences): with ``b = C^T (w g n / 2)``
-  (per component) and ``a = -g (b . n) + w g (gamma . tau) / 2 = dA/dtheta``,
-  ``dA/dkappa = g C^T a`` and ``dA/dg = w (gamma . n) / 2 + tau . b + kappa C^T a``;
-  the ``<.,.>``-gradient divides both by ``dsigma = w g``;
-* Hessian: with ``Ka = K - K^T``, ``S_jk = sin(theta_j - theta_k)``,
-  ``Co_jk = cos(theta_j - theta_k)`` and ``beta = dA/dg`` at fixed ``theta``,
-  ``A_thth = -diag(g beta) + diag(g) (Ka o S) diag(g)``, ``A_thg = diag(a / g) +
-  diag(g) (Ka o Co)``, ``A_gg = Ka o S``; with ``T = dtheta/dU = [C diag(g), C diag(kappa)]``
-  and ``E_g = [0, I]``, the Euclidean Hessian is
-  ``T^T A_thth T + T^T A_thg E_g + E_g^T A_thg^T T + E_g^T A_gg E_g``
-  ``+ [[0, diag(C^T a)], [diag(C^T a), 0]]`` (the last term from the product
-  ``kappa g`` inside ``theta``), and the ``<.,.>``-Hessian is ``W2^{-1}`` times it,
-  ``W2 = diag(dsigma, dsigma)``.
-
-On a closed curve the first variation along a normal motion is ``<1, V>``: the
-gradient ``nabla_I A`` maps to ``-[M-dagger nabla_I A]_1 = -1`` (the normal velocity
-of the energy ``A``), up to the discretization error of ``M-dagger``. The length
-``L = int g ds`` has ``nabla_I L = (0, 1/g)`` and ``nabla_I^2 L = 0`` exactly, and
-``-[M-dagger nabla_I L]_1 = -kappa``.
+The enclosed area and the length, with their exact discrete gradients and Hessians, are
+:mod:`qsa.measures` (re-exported here).
 
 The constrained linearization
 -----------------------------
@@ -75,17 +42,27 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.sparse as sp
 
 from qsa._checks import real_number
 from qsa.curve import Curve
+from qsa.measures import (
+    area_gradient,
+    area_gradient_euclidean,
+    area_hessian,
+    length_gradient,
+    length_hessian,
+)
 
 __all__ = [
     "Constraint",
     "FixedLength",
     "FixedArea",
     "bind_constraints",
+    "check_constraints",
     "constraint_normals",
+    "normal_basis",
+    "flow_multipliers",
+    "project_velocity",
     "area_gradient",
     "area_gradient_euclidean",
     "area_hessian",
@@ -94,181 +71,6 @@ __all__ = [
 ]
 
 
-# ----------------------------------------------------------------- the area
-def _area_parts(c: Curve):
-    """``(a, beta, b)``: ``dA/dtheta``, ``dA/dg`` at fixed ``theta``, ``b = C^T (w g n / 2)``."""
-    grid = c.grid
-    w, g = grid.weights, c.g
-    th = c.theta()
-    tau = np.array([np.cos(th), np.sin(th)])
-    n = np.array([np.sin(th), -np.cos(th)])
-    gam = c.positions()
-    b = grid.cumulative_transpose((0.5 * w * g * n).T).T  # (2, N)
-    a = -g * np.sum(b * n, axis=0) + 0.5 * w * g * np.sum(gam * tau, axis=0)
-    beta = 0.5 * w * np.sum(gam * n, axis=0) + np.sum(tau * b, axis=0)
-    return a, beta
-
-
-def area_gradient_euclidean(c: Curve) -> np.ndarray:
-    """Exact derivative ``dA/dU`` of the discrete area :meth:`~qsa.curve.Curve.area`, (2N,).
-
-    The plain (Euclidean) gradient, ``A(U + d U1) = A + d (dA/dU) . U1 + O(d^2)``
-    (no inner-product weights): the row of a Newton matrix.
-
-    Parameters
-    ----------
-    c : Curve
-
-    Returns
-    -------
-    ndarray, shape (2N,)
-        Stacked ``[dA/dkappa, dA/dg]``; ``area_gradient(c) * [dsigma, dsigma]``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import Curve, FiniteDifference
-    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), FiniteDifference(32))
-    >>> U1 = np.concatenate([np.cos(2 * np.pi * c.grid.s), np.ones(32)])
-    >>> d = 1e-6
-    >>> fd = (c.with_U(c.U + d * U1).area() - c.with_U(c.U - d * U1).area()) / (2 * d)
-    >>> bool(np.isclose(fd, area_gradient_euclidean(c) @ U1, rtol=1e-8))
-    True
-    """
-    a, beta = _area_parts(c)
-    ca = c.grid.cumulative_transpose(a)
-    return np.concatenate([c.g * ca, beta + c.kappa * ca])
-
-
-def area_gradient(c: Curve) -> np.ndarray:
-    """``nabla_I A`` in ``<f, h> = int f h dsigma``: the exact gradient of the discrete area, (2N,).
-
-    ``d/d delta A(U + delta U1) = <nabla_I A, U1>`` exactly for the discrete area and
-    inner product (module docstring). On a closed curve it is, up to the
-    discretization, ``(-|gamma - gamma0|^2 / 2, (-kappa |gamma - gamma0|^2 / 2 +
-    (gamma - gamma0) . n) / g)`` plus a combination of the closure gradients ``Psi_j``.
-
-    Parameters
-    ----------
-    c : Curve
-
-    Returns
-    -------
-    ndarray, shape (2N,)
-        Stacked ``[d_kappa A, d_g A]``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import Curve, Fourier, geometry
-    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(65))
-    >>> V = -(geometry.M_adjoint(c) @ area_gradient(c))[:65]  # the normal velocity of A
-    >>> bool(np.allclose(V, -1.0, atol=1e-8))
-    True
-    """
-    w = np.concatenate([c.dsigma, c.dsigma])
-    return area_gradient_euclidean(c) / w
-
-
-def area_hessian(c: Curve) -> np.ndarray:
-    """``nabla_I^2 A`` in ``<f, h> = int f h dsigma``: the exact Hessian of the discrete area.
-
-    ``d^2/d delta^2 A(U + delta U1) = <H U1, U1>`` along straight paths, at every ``U``
-    (closed or not); the formula is in the module docstring.
-
-    Parameters
-    ----------
-    c : Curve
-
-    Returns
-    -------
-    ndarray, shape (2N, 2N)
-        Dense (the cumulative integrals couple all nodes); ``W2 H`` is symmetric,
-        ``W2 = diag(dsigma, dsigma)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import Curve, Fourier
-    >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), Fourier(33))
-    >>> U1 = np.concatenate([np.cos(2 * np.pi * c.grid.s), 0.3 * np.ones(33)])
-    >>> A = lambda t: c.with_U(c.U + t * U1).area()
-    >>> d, w = 1e-3, np.concatenate([c.dsigma, c.dsigma])
-    >>> second = (A(d) - 2 * A(0) + A(-d)) / d**2
-    >>> bool(np.isclose(second, (area_hessian(c) @ U1) @ (U1 * w), rtol=1e-5))
-    True
-    """
-    grid = c.grid
-    N = c.N
-    w, g, k = grid.weights, c.g, c.kappa
-    th = c.theta()
-    a, beta = _area_parts(c)
-    C = grid.cumulative_matrix()
-    K = 0.5 * w[:, None] * C
-    Ka = K - K.T
-    dth = th[:, None] - th[None, :]
-    KS = Ka * np.sin(dth)
-    Att = -np.diag(g * beta) + g[:, None] * KS * g[None, :]
-    Atg = np.diag(a / g) + g[:, None] * (Ka * np.cos(dth))
-    T = np.hstack([C * g[None, :], C * k[None, :]])  # d theta / dU, (N, 2N)
-    H = T.T @ (Att @ T)
-    cross = T.T @ Atg  # (2N, N): the columns acting on g
-    H[:, N:] += cross
-    H[N:, :] += cross.T
-    H[N:, N:] += KS
-    ca = C.T @ a
-    idx = np.arange(N)
-    H[idx, N + idx] += ca
-    H[N + idx, idx] += ca
-    W2 = np.concatenate([c.dsigma, c.dsigma])
-    return H / W2[:, None]
-
-
-# ---------------------------------------------------------------- the length
-def length_gradient(c: Curve) -> np.ndarray:
-    """``nabla_I L = (0, 1/g)`` in ``<f, h> = int f h dsigma``, ``L = int g ds``, shape (2N,).
-
-    Parameters
-    ----------
-    c : Curve
-
-    Returns
-    -------
-    ndarray, shape (2N,)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import Curve, Fourier
-    >>> c = Curve.circle(1.0, Fourier(9))
-    >>> bool(np.allclose(length_gradient(c)[9:], 1 / (2 * np.pi)))
-    True
-    """
-    return np.concatenate([np.zeros(c.N), 1.0 / c.g])
-
-
-def length_hessian(c: Curve):
-    """``nabla_I^2 L = 0`` (``L`` is linear in ``g``), in the grid's matrix type, (2N, 2N).
-
-    Parameters
-    ----------
-    c : Curve
-
-    Returns
-    -------
-    sparse CSR matrix (finite differences) or ndarray (Fourier), shape (2N, 2N)
-
-    Examples
-    --------
-    >>> from qsa import Curve, Fourier
-    >>> float(abs(length_hessian(Curve.circle(1.0, Fourier(9)))).max())
-    0.0
-    """
-    n = 2 * c.N
-    return sp.csr_matrix((n, n)) if c.grid.sparse else np.zeros((n, n))
-
-
-# ------------------------------------------------------------ the constraints
 class Constraint(ABC):
     """A scalar constraint ``c(U) = target`` on a closed curve (see the module docstring).
 
@@ -427,6 +229,60 @@ class FixedArea(Constraint):
         return np.ones(c.N)
 
 
+def check_constraints(constraints) -> tuple:
+    """Validate a list of constraints (without binding them); ``None`` is no constraint.
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint, a Constraint, or None
+        Entries may also be the dicts of :meth:`Constraint.params` (as stored in files).
+
+    Returns
+    -------
+    tuple of Constraint
+
+    Raises
+    ------
+    ValueError
+        An entry that is not a :class:`Constraint`, or the same kind twice.
+
+    Examples
+    --------
+    >>> check_constraints([{"constraint": "FixedArea", "A": 2.0}])
+    (FixedArea(A=2.0),)
+    >>> check_constraints([FixedLength(), FixedLength(6.0)])
+    Traceback (most recent call last):
+    ...
+    ValueError: constraints: FixedLength is given twice; pass each constraint at most once
+    """
+    if constraints is None:
+        return ()
+    if isinstance(constraints, (Constraint, dict)):
+        constraints = (constraints,)
+    try:
+        items = tuple(constraints)
+    except TypeError:
+        raise ValueError("constraints must be a list of FixedLength() / FixedArea(), "
+                         f"got {type(constraints).__name__}") from None
+    kinds = {"FixedLength": FixedLength, "FixedArea": FixedArea}
+    seen = set()
+    out = []
+    for con in items:
+        if isinstance(con, dict) and con.get("constraint") in kinds:
+            cls = kinds[con["constraint"]]
+            con = cls(con.get(cls._field))
+        if not isinstance(con, Constraint):
+            raise ValueError("constraints must contain qsa.constraints.FixedLength / FixedArea "
+                             f"objects, got {type(con).__name__}")
+        kind = type(con).__name__
+        if kind in seen:
+            raise ValueError(f"constraints: {kind} is given twice; pass each constraint at "
+                             "most once")
+        seen.add(kind)
+        out.append(con)
+    return tuple(out)
+
+
 def bind_constraints(constraints, curve: Curve) -> tuple:
     """Validate ``constraints`` and bind each to ``curve`` (``None`` targets -> its values).
 
@@ -444,7 +300,7 @@ def bind_constraints(constraints, curve: Curve) -> tuple:
     Raises
     ------
     ValueError
-        An entry that is not a :class:`Constraint`, or the same kind twice.
+        See :func:`check_constraints`.
 
     Examples
     --------
@@ -452,33 +308,8 @@ def bind_constraints(constraints, curve: Curve) -> tuple:
     >>> c = Curve.circle(1.0, Fourier(17))
     >>> [type(k).__name__ for k in bind_constraints([FixedArea(), FixedLength()], c)]
     ['FixedArea', 'FixedLength']
-    >>> bind_constraints([FixedLength(), FixedLength(6.0)], c)
-    Traceback (most recent call last):
-    ...
-    ValueError: constraints: FixedLength is given twice; pass each constraint at most once
     """
-    if constraints is None:
-        return ()
-    if isinstance(constraints, Constraint):
-        constraints = (constraints,)
-    try:
-        items = tuple(constraints)
-    except TypeError:
-        raise ValueError("constraints must be a list of FixedLength() / FixedArea(), "
-                         f"got {type(constraints).__name__}") from None
-    seen = set()
-    out = []
-    for con in items:
-        if not isinstance(con, Constraint):
-            raise ValueError("constraints must contain qsa.constraints.FixedLength / FixedArea "
-                             f"objects, got {type(con).__name__}")
-        kind = type(con).__name__
-        if kind in seen:
-            raise ValueError(f"constraints: {kind} is given twice; pass each constraint at "
-                             "most once")
-        seen.add(kind)
-        out.append(con.bind(curve))
-    return tuple(out)
+    return tuple(con.bind(curve) for con in check_constraints(constraints))
 
 
 def constraint_normals(constraints, curve: Curve) -> np.ndarray:
@@ -502,3 +333,104 @@ def constraint_normals(constraints, curve: Curve) -> np.ndarray:
     [0.5, 1.0]
     """
     return np.array([con.normal_variation(curve) for con in constraints]).reshape(-1, curve.N)
+
+
+def normal_basis(constraints, curve: Curve, rtol=1e-8) -> np.ndarray:
+    """``<.,.>``-orthonormal basis of the constraints' normal variations, shape (m', N).
+
+    ``m' <= m``: dependent normals are dropped (a circle with a length and an area
+    constraint has ``n_L = kappa`` constant, parallel to ``n_A = 1``).
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint
+    curve : Curve
+    rtol : float
+        Singular values below ``rtol`` times the largest count as dependent.
+
+    Returns
+    -------
+    ndarray, shape (m', N)
+        Rows ``r`` with ``sum(r_i r_j dsigma) = delta_ij``; the ``<.,.>``-orthogonal
+        projection onto ``T = {phi : <n_c, phi> = 0}`` is ``phi - R^T (R (dsigma phi))``.
+
+    Examples
+    --------
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> normal_basis([FixedLength(), FixedArea()], c).shape
+    (1, 17)
+    """
+    n = constraint_normals(constraints, curve)
+    if n.shape[0] == 0:
+        return np.zeros((0, curve.N))
+    rw = np.sqrt(curve.dsigma)
+    U, sv, _ = np.linalg.svd((n * rw).T, full_matrices=False)
+    keep = int(np.sum(sv > rtol * sv[0])) if sv[0] > 0 else 0
+    return (U[:, :keep] / rw[:, None]).T
+
+
+def flow_multipliers(constraints, curve: Curve, V) -> np.ndarray:
+    """The multipliers ``mu`` of the constrained gradient flow: ``<n_i, V + mu . n> = 0``, (m,).
+
+    ``V + sum_i mu_i n_i`` is the ``<.,.>``-orthogonal projection of ``V`` onto
+    ``T = {phi : <n_i, phi> = 0}`` (``mu`` minimises ``|V + mu . n|``): the normal velocity
+    that conserves every constraint (``d/dt c_i = <n_i, V + mu . n> = 0``). At an
+    equilibrium these are the Lagrange multipliers of the module docstring. A
+    degenerate set of normals (a circle with both constraints: ``kappa`` is constant)
+    is handled by least squares.
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint
+    curve : Curve
+    V : ndarray, shape (N,)
+        Outward normal velocity of the energy.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(9))
+    >>> flow_multipliers([FixedArea()], c, np.full(9, 0.25)).round(12).tolist()
+    [-0.25]
+    """
+    n = constraint_normals(constraints, curve)
+    if n.shape[0] == 0:
+        return np.zeros(0)
+    w = curve.dsigma
+    G = (n * w) @ n.T
+    return -np.linalg.lstsq(G, (n * w) @ np.asarray(V, dtype=float), rcond=1e-12)[0]
+
+
+def project_velocity(constraints, curve: Curve, V) -> np.ndarray:
+    """``V + mu . n`` with the :func:`flow_multipliers`: the constrained normal velocity, (N,).
+
+    Parameters
+    ----------
+    constraints : sequence of Constraint
+    curve : Curve
+    V : ndarray, shape (N,)
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        ``<.,.>``-orthogonal to every ``n_i``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> c = Curve.circle(1.0, Fourier(9))
+    >>> V = project_velocity([FixedArea()], c, 1 + np.cos(2 * np.pi * c.grid.s))
+    >>> bool(abs(V @ c.dsigma) < 1e-12), bool(np.allclose(V, np.cos(2 * np.pi * c.grid.s)))
+    (True, True)
+    """
+    V = np.asarray(V, dtype=float)
+    if not constraints:
+        return V
+    return V + flow_multipliers(constraints, curve, V) @ constraint_normals(constraints, curve)

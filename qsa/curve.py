@@ -21,10 +21,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from qsa.discretize import Fourier, Grid
-from qsa.polygon import polygon_self_intersects, self_intersections
+from qsa.polygon import check_simple, polygon_self_intersects, self_intersections
 from qsa.resample import PeriodicInterpolant, closed_samples, equal_arclength_parameters
 
-__all__ = ["Curve", "polygon_self_intersects", "self_intersections"]
+__all__ = ["Curve", "polygon_self_intersects", "self_intersections", "check_simple"]
 
 
 def _readonly(a, name, N):
@@ -258,12 +258,24 @@ class Curve:
                          self.kappa @ self.dsigma - 2 * np.pi])
 
     def area(self) -> float:
-        """Enclosed area ``A = 1/2 int gamma . n dsigma`` (positive for counter-clockwise curves).
+        """Enclosed area (positive for counter-clockwise curves), defined off closure too.
 
-        With ``gamma = gamma0 + D tau`` and the outward normal ``n``, evaluated with the
-        grid's quadrature. It is the discrete area whose exact derivatives
-        :func:`qsa.constraints.area_gradient` and :func:`qsa.constraints.area_hessian`
-        compute; on a closed curve it does not depend on the base point ``gamma0``.
+        With the closure defects spread linearly over ``s in [0, 1)`` -- the excess
+        turning ``K - 2 pi`` (``K = int kappa dsigma``) out of ``theta``, and the mean
+        out of ``tau g`` -- the curve becomes the closed one with tangent angle
+        ``theta_hat = theta - (K - 2 pi) s`` and centred positions
+        ``gamma_hat = Q (g tau_hat)`` (``Q`` the periodic antiderivative of mean-zero
+        functions), whose area is
+
+            A = 1/2 int (v~ Q u~ - u~ Q v~) ds,
+
+        ``u~ = g cos theta_hat - mean``, ``v~ = g sin theta_hat - mean`` (the mean in
+        ``ds``). On a closed curve it is ``1/2 int gamma . n dsigma``; off closure it is a
+        smooth function of ``U`` with periodic integrands only, invariant under
+        rotations and translations (it does not see ``theta0`` or ``gamma(0)``). ``Q`` is
+        the grid's cumulative integral (spectral on Fourier grids, trapezoidal on finite
+        differences); :func:`qsa.constraints.area_gradient` and
+        :func:`qsa.constraints.area_hessian` are its exact derivatives.
 
         Returns
         -------
@@ -276,9 +288,14 @@ class Curve:
         >>> round(Curve.circle(2.0, Fourier(17), center=(1.0, -3.0)).area() / np.pi, 12)
         4.0
         """
-        x, y = self.positions()
-        th = self.theta()
-        return float(0.5 * (x * np.sin(th) - y * np.cos(th)) @ self.dsigma)
+        w = self.grid.weights
+        th = self.theta() - (self.kappa @ self.dsigma - 2 * np.pi) * self.grid.s
+        u = self.g * np.cos(th)
+        v = self.g * np.sin(th)
+        u = u - w @ u
+        v = v - w @ v
+        cu, cv = self.grid.cumulative(u), self.grid.cumulative(v)
+        return float(0.5 * ((w * v) @ cu - (w * u) @ cv))
 
     def grad_s(self, f) -> np.ndarray:
         """Surface gradient ``nabla_s f = (1/g) df/ds`` at the nodes.
@@ -514,7 +531,10 @@ class Curve:
         Raises
         ------
         ValueError
-            Invalid samples (see :func:`qsa.resample.closed_samples`) or clockwise data.
+            Invalid samples (see :func:`qsa.resample.closed_samples`), clockwise
+            data, or samples of a curve that is not simple: crossing segments, or
+            a total turning ``int kappa dsigma`` other than ``2 pi`` (a limaçon
+            with an inner loop turns twice).
 
         Examples
         --------
@@ -524,6 +544,12 @@ class Curve:
         >>> c = Curve.from_positions(2 * np.cos(t), np.sin(t), Fourier(33))
         >>> round(c.length(), 6)  # ellipse with semi-axes 2 and 1
         9.688448
+        >>> r = 0.5 + np.cos(t)  # limaçon with an inner loop: turning number 2
+        >>> try:
+        ...     Curve.from_positions(r * np.cos(t), r * np.sin(t), Fourier(33))
+        ... except ValueError as exc:
+        ...     print(str(exc)[:48])
+        from_positions: the samples intersect themselves
         """
         x, y = closed_samples(x, y, name="from_positions(x, y)")
         if interpolant == "auto":
@@ -532,8 +558,19 @@ class Curve:
         if area <= 0:
             raise ValueError("from_positions: the samples run clockwise (or enclose no area); "
                              "pass them counter-clockwise")
-        return cls._from_interpolant(PeriodicInterpolant(x, y, interpolant), grid,
-                                     stencil_kappa=grid.sparse)
+        crossings = self_intersections(x, y)
+        if crossings.shape[0]:
+            i, j = crossings[0]
+            raise ValueError(f"from_positions: the samples intersect themselves (segments {i} "
+                             f"and {j} cross); a curve must be simple (turning number 1)")
+        curve = cls._from_interpolant(PeriodicInterpolant(x, y, interpolant), grid,
+                                      stencil_kappa=grid.sparse)
+        turning = float(curve.kappa @ curve.dsigma) / (2 * np.pi)
+        if abs(turning - 1) > 0.25:
+            raise ValueError(f"from_positions: the resampled curve turns {turning:.3g} times "
+                             f"(int kappa dsigma = {2 * np.pi * turning:.4g}, not 2 pi); it is "
+                             "not simple, or the grid is too coarse for it")
+        return curve
 
     @classmethod
     def _from_interpolant(cls, curve: PeriodicInterpolant, grid: Grid,

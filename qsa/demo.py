@@ -99,20 +99,24 @@ def stage_spectrum(eq) -> dict:
 
 
 def stage_splice() -> dict:
-    """A heteroclinic splice (rounded triangle with unequal facets) and its small eigenvalues.
+    """A heteroclinic splice (rounded triangle, unequal facets) and its small eigenvalues.
 
-    The 2N - 1 = 5 small eigenvalues (front motions on the splice manifold that keep
-    the closure) are separated from the O(1) negative ones: the spectral dichotomy
-    behind the front-position ODE.
+    The corner angles 121, 109.5 and 129.5 degrees are those of a triangle with
+    sides 0.9, 1.0, 1.1, so the closing facets are close to these (the summary
+    reports the ones used). The 2N - 1 = 5 small eigenvalues (front motions on the
+    splice manifold that keep the closure) are separated from the O(1) negative
+    ones: the spectral dichotomy behind the front-position ODE.
     """
-    eq = equilibria.splice_polygon([2 * np.pi / 3] * 3, [0.9, 1.0, 1.1], ALPHA, kstar=KSTAR,
-                                   grid=255)
+    requested = [0.9, 1.0, 1.1]
+    eq = equilibria.splice_polygon(np.radians([121.0, 109.5, 129.5]), requested, ALPHA,
+                                   kstar=KSTAR, grid=255)
     with warnings.catch_warnings():  # a splice is a quasi-equilibrium: said in the summary
         warnings.simplefilter("ignore", spectra.NotEquilibriumWarning)
         sp = spectra.spectrum(eq.energy, eq.curve, reject_spurious=False)
     lam = sp.eigenvalues
     n_small = sp.n_small
-    out = {"N": eq.curve.N, "alpha": ALPHA, "facets": [0.9, 1.0, 1.1],
+    out = {"N": eq.curve.N, "alpha": ALPHA, "angles_degrees": [121.0, 109.5, 129.5],
+           "facets": [float(f) for f in eq.params["facets"]], "facets_requested": requested,
            "closure": eq.closure, "residual": eq.residual, "d_min": eq.params["d_min"],
            "n_small": n_small, "n_small_expected": 2 * 3 - 1,
            "small_eigenvalues": lam[:n_small].tolist(),
@@ -174,7 +178,8 @@ def run_demo(outdir="qsa-demo", plots=True, verbose=True) -> dict:
             "spectrum_npulse3.png": plotting.plot_spectrum(
                 objects["_spectrum"], title="spectrum of J at the 3-pulse").figure,
             "splice.png": plotting.plot_curve_and_curvature(
-                objects["_splice"].curve, title="heteroclinic splice, facets 0.9, 1.0, 1.1"),
+                objects["_splice"].curve, title="heteroclinic splice, facets "
+                + ", ".join(f"{f:.3g}" for f in summary["splice"]["facets"])),
             "flow_decay.png": _decay_figure(plotting, summary["flow"], *objects["_flow"]),
         }
         for fname, fig in figs.items():

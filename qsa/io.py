@@ -1,15 +1,92 @@
 """Files: atomic ``.npz`` archives with JSON metadata, loaded without pickle.
 
 One file holds both the arrays and a JSON document (stored as the UTF-8 bytes
-of the member ``__meta__.npy``), so a checkpoint is a single file that is
-replaced atomically: the data are written to a temporary file in the same
-folder, flushed to disk, then renamed over the target (``os.replace``). A run
-killed while writing leaves the previous file intact.
+of the member ``__meta__.npy``), so a result or a checkpoint is a single file
+that is replaced atomically: the data are written to a temporary file in the
+same folder, flushed to disk, then renamed over the target (``os.replace``).
+A run killed while writing leaves the previous file intact. A new file gets
+the permissions of the user's umask (``0o666 & ~umask``, as ``open`` gives); a
+replaced file keeps its permissions.
 
 Loading never unpickles (``allow_pickle=False``) and reads every member
 eagerly, so a truncated or corrupted file (bad zip directory, CRC mismatch,
 missing metadata) raises ``ValueError`` naming the file instead of failing
-later.
+later. :func:`load` turns any result file qsa writes back into its result
+object; :func:`load_npz` gives the raw arrays and metadata of any of them.
+
+File layouts
+------------
+Every file is an ``.npz`` (zip) archive of ``.npy`` arrays plus ``__meta__``,
+the JSON metadata; ``meta["kind"]`` names the layout and ``meta["version"]``
+the qsa that wrote it. The fields of a result object are under a key of its
+own (``meta["equilibrium"]``, ``meta["spectrum"]``, ``meta["result"]``); an
+array ``a.b`` is the field ``b`` of the nested object ``a``. Arrays keep their
+dtype (float64, complex128 eigenvalues, bool masks).
+
+``qsa.equilibrium`` -- :func:`save_equilibrium`, ``qsa equilibrium ... --save FILE``
+    arrays
+        ``kappa``, ``g`` : shape (N,), the curve's curvature and arc-length
+        density; ``multipliers`` : shape (3,), Lambda.
+    ``meta["equilibrium"]``
+        ``grid`` ``{"kind": "Fourier" | "FiniteDifference", "N"}``, ``theta0``,
+        ``origin`` ``[x, y]`` (the curve); ``energy``: the energy's ``params()``,
+        e.g. ``{"energy": "sum", "terms": [{"energy": "Faceting", "alpha",
+        "kstar"}, {"energy": "Perimeter", "beta", "L_star"}]}``; ``params``
+        (construction parameters: ``L``, ``L_star``, ``alpha``, ``facets``, ...);
+        ``residual``, ``closure``, ``residual_scale``, ``kind`` (``"npulse"``,
+        ``"splice"``, ``"circle"``, ``"polished"``), ``success``, ``message``.
+
+``qsa.spectrum`` -- :func:`save_spectrum`, ``qsa spectrum ... --save FILE``
+    arrays
+        ``eigenvalues`` : (m,), ``eigenvectors`` : (n, m) (columns, normalised
+        in the gauge's inner product), ``errors`` : (m,), ``is_kernel`` : (m,)
+        bool, ``drift`` : (m,), ``unresolved``, ``unresolved_errors``,
+        ``spurious``, ``multipliers`` : (3,); ``kernel.rigid``, ``kernel.psi``,
+        ``kernel.rigid_normal``, ``kernel.multipliers`` : (3,); and the
+        equilibrium the spectrum is of, as above with the prefix
+        ``equilibrium.`` (``equilibrium.kappa``, ``equilibrium.g``,
+        ``equilibrium.multipliers``).
+    ``meta["spectrum"]``
+        The other fields of :class:`~qsa.spectra.Spectrum` (``gauge``,
+        ``method``, ``N``, ``N2``, ``sigma``, ``n_unstable``, ``n_kernel``,
+        ``kernel_tol``, ``n_small``, ``gap_ratio``, ``roundoff``, ``rtol``,
+        ``success``, ``status``, ``message``, ...); ``meta["kernel"]``: those of
+        :class:`~qsa.spectra.KernelReport` (``notes`` a list);
+        ``meta["equilibrium"]``: as above.
+
+``qsa.flow-result`` -- :func:`save_flow_result`, ``qsa flow ... --out DIR`` (``DIR/result.npz``)
+    arrays
+        ``t`` : (n,) snapshot times; ``states`` : (n, size) full DAE states
+        (blocks of N in the order of ``meta["model"]["unknowns"]``, the last
+        entry L); ``energy``, ``length`` : (n,); ``t_steps``, ``energy_steps``,
+        ``length_steps`` : (n_steps + 1,); ``x``, ``y`` : (N,) final nodes;
+        ``x_setup``, ``y_setup`` : (N,) the nodes the system was set up from.
+    ``meta["result"]``
+        ``success``, ``status``, ``message``, ``method``, ``tol``, ``n_steps``,
+        ``n_rejected``, ``n_newton``, ``n_factorizations``,
+        ``n_newton_failures``, ``checkpoint``.
+    ``meta["model"]``, ``meta["bound"]``
+        ``system.metadata()`` (model name, N, parameters, unknowns) and the
+        constants fixed at setup (CHA's ``L0``). The command line adds its
+        summary at the top level (``N``, ``t_final``, ``energy_final``, ...).
+
+``qsa.flow-checkpoint`` -- :func:`qsa.flows.solve_flow` ``checkpoint=``
+    arrays
+        ``y`` : (size,) the current state; ``x_setup``, ``y_setup`` : (N,);
+        ``history_t``, ``history_y`` (BDF2's previous states), ``be_slope``,
+        ``pool_c``, ``pool_y``, ``pool_ydot`` (where the Newton matrices were
+        factorized, so a resumed run rebuilds the same ones),
+        ``newton_theta``; ``snap_t``, ``snap_y``, ``snap_E``, ``snap_L`` (the
+        snapshots so far); ``step_t``, ``step_E``, ``step_L``.
+    meta
+        ``model``, ``bound``, ``options`` (``method``, ``tol``),
+        ``integrator`` (``t``, ``h``, counters), ``status`` (``"running"``,
+        ``"interrupted"``, ``"finished"``, ``"stopped"``, ``"failed"``,
+        ``"max_steps"``), ``t_final``.
+
+The paper's runs (``qsa reproduce``) write ``<name>.npz`` with the arrays of
+their result's ``arrays()`` and its ``summary()`` as metadata (also in
+``<name>.json``); sweeps write one file per point. :func:`load_npz` reads them.
 
 Examples
 --------
@@ -19,105 +96,127 @@ Examples
 >>> arrays, meta = load_npz(path)
 >>> arrays["y"].tolist(), meta["t"]
 ([0.0, 1.0, 2.0], 0.5)
+
+An equilibrium written and read back:
+
+>>> from qsa.equilibria import circle
+>>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
+>>> _ = save_equilibrium(os.path.join(os.path.dirname(path), "eq.npz"), eq)
+>>> back = load(os.path.join(os.path.dirname(path), "eq.npz"))
+>>> type(back).__name__, bool(np.array_equal(back.curve.kappa, eq.curve.kappa))
+('Equilibrium', True)
 """
 
 from __future__ import annotations
 
-import json
 import os
-import tempfile
-import zipfile
 
-import numpy as np
+from qsa import _codecs
+from qsa._version import __version__
+from qsa.npz import json_default, load_npz, save_npz, write_atomically
 
-__all__ = ["save_npz", "load_npz", "json_default"]
+__all__ = ["save_npz", "load_npz", "json_default", "write_atomically", "load",
+           "load_equilibrium", "save_equilibrium", "save_spectrum", "save_flow_result"]
 
-_META = "__meta__"
-
-
-def save_npz(path, arrays, meta):
-    """Write ``arrays`` (name -> ndarray) and the JSON-serialisable ``meta`` atomically.
+# ------------------------------------------------------------------ result files
+def save_equilibrium(path, equilibrium, extra_meta=None):
+    """Write an :class:`~qsa.equilibria.Equilibrium` (layout ``qsa.equilibrium``).
 
     Parameters
     ----------
     path : str or os.PathLike
-        Target file (conventionally ``.npz``; written exactly at this path).
-    arrays : dict of str -> array_like
-        Numeric arrays (object arrays are refused: they would need pickle).
-    meta : dict
-        JSON-serialisable metadata (NumPy scalars are converted).
+    equilibrium : Equilibrium
+    extra_meta : dict, optional
+        More JSON metadata (e.g. the command line's summary); never overrides
+        the layout's own keys.
 
     Returns
     -------
     str
-        The path written.
-    """
-    path = os.fspath(path)
-    if _META in arrays:
-        raise ValueError(f"arrays: the name {_META!r} is reserved for the metadata")
-    clean = {}
-    for name, value in arrays.items():
-        a = np.asarray(value)
-        if a.dtype == object:
-            raise ValueError(f"arrays[{name!r}] has dtype object; only numeric arrays are stored")
-        clean[name] = a
-    text = json.dumps(meta, default=json_default, allow_nan=True)
-    clean[_META] = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
-    folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, **clean)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-def load_npz(path):
-    """Read a file written by :func:`save_npz`.
-
-    Returns
-    -------
-    arrays : dict of str -> ndarray
-    meta : dict
 
     Raises
     ------
     ValueError
-        If the file is missing, truncated, corrupted or not written by
-        :func:`save_npz`.
+        An energy its parameters do not describe (e.g. a custom well).
     """
-    path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise ValueError(f"{path}: no such file")
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {name: data[name] for name in data.files}
-    except (zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError,
-            zipfile.LargeZipFile) as exc:
-        raise ValueError(f"{path}: corrupt or truncated file ({type(exc).__name__}: {exc})") \
-            from None
-    if _META not in arrays:
-        raise ValueError(f"{path}: not a qsa file (no {_META!r} metadata member)")
-    try:
-        meta = json.loads(arrays.pop(_META).tobytes().decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: corrupt metadata ({exc})") from None
-    if not isinstance(meta, dict):
-        raise ValueError(f"{path}: corrupt metadata (not a JSON object)")
-    return arrays, meta
+    arrays, fields = _codecs.encode_equilibrium(equilibrium)
+    meta = {"kind": _codecs.KIND_EQUILIBRIUM, "version": __version__, "equilibrium": fields}
+    return save_npz(path, arrays, {**(extra_meta or {}), **meta})
 
 
-def json_default(value):
-    """``json.dump(default=...)`` for NumPy scalars and arrays (anything else: TypeError)."""
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
+def save_spectrum(path, spectrum, equilibrium, extra_meta=None):
+    """Write a :class:`~qsa.spectra.Spectrum` with its equilibrium (layout ``qsa.spectrum``).
+
+    Returns
+    -------
+    str
+    """
+    arrays, meta = _codecs.encode_spectrum(spectrum, equilibrium)
+    return save_npz(path, arrays, {**(extra_meta or {}), **meta})
+
+
+def save_flow_result(path, result, extra_meta=None):
+    """Write a :class:`~qsa.flows.FlowResult` (layout ``qsa.flow-result``).
+
+    Returns
+    -------
+    str
+    """
+    arrays, meta = _codecs.encode_flow_result(result)
+    return save_npz(path, arrays, {**(extra_meta or {}), **meta})
+
+
+def load(path):
+    """The result object stored in a file qsa wrote.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    Equilibrium, Spectrum or FlowResult
+        By the file's kind: ``qsa.equilibrium`` -> Equilibrium, ``qsa.spectrum``
+        -> Spectrum (its equilibrium: :func:`load_equilibrium`),
+        ``qsa.flow-result`` and ``qsa.flow-checkpoint`` -> FlowResult (a
+        checkpoint gives the run up to its time).
+
+    Raises
+    ------
+    ValueError
+        A missing or damaged file, or one whose kind has no result object (a
+        paper run, a sweep point: read those with :func:`load_npz`).
+    """
+    arrays, meta = load_npz(path)
+    kind = meta.get("kind")
+    try:
+        if kind == _codecs.KIND_EQUILIBRIUM:
+            return _codecs.decode_equilibrium(arrays, meta["equilibrium"])
+        if kind == _codecs.KIND_SPECTRUM:
+            return _codecs.decode_spectrum(arrays, meta)
+        if kind == _codecs.KIND_FLOW_RESULT:
+            return _codecs.decode_flow_result(arrays, meta)
+        if kind == _codecs.KIND_FLOW_CHECKPOINT:
+            return _codecs.decode_flow_checkpoint(arrays, meta, os.fspath(path))
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{os.fspath(path)}: a {kind} file with missing or bad fields "
+                         f"({type(exc).__name__}: {exc})") from None
+    what = f"kind {kind!r}" if kind else "no 'kind' (a paper run's data or an older file)"
+    raise ValueError(f"{os.fspath(path)}: a qsa file of {what}, which has no result object; "
+                     "read its arrays and metadata with qsa.io.load_npz")
+
+
+def load_equilibrium(path):
+    """The :class:`~qsa.equilibria.Equilibrium` in an equilibrium or spectrum file.
+
+    Raises
+    ------
+    ValueError
+        A file of another kind.
+    """
+    arrays, meta = load_npz(path)
+    kind = meta.get("kind")
+    prefixes = {_codecs.KIND_EQUILIBRIUM: "", _codecs.KIND_SPECTRUM: "equilibrium"}
+    if kind in prefixes:
+        return _codecs.decode_equilibrium(arrays, meta["equilibrium"], prefixes[kind])
+    raise ValueError(f"{os.fspath(path)}: holds no equilibrium (kind {kind!r})")

@@ -3,8 +3,9 @@
 A curve sampled at nodes ``(x_j, y_j)`` is the closed polygon through them;
 :func:`self_intersections` lists its crossing segment pairs in O(N log N) (a k-d tree
 of the segment midpoints, then exact orientation tests), :func:`polygon_self_intersects`
-says whether there is any. :meth:`qsa.Curve.self_intersects`, the flows' input checks
-and their self-contact detection use them.
+says whether there is any, and :func:`check_simple` refuses a curve whose polygon crosses
+or touches itself, naming the place. :meth:`qsa.Curve.self_intersects`, the flows' input
+checks and their self-contact detection, polish and spectrum use them.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["polygon_self_intersects", "self_intersections"]
+__all__ = ["check_simple", "polygon_self_intersects", "self_intersections"]
 
 
 def polygon_self_intersects(x, y) -> bool:
@@ -100,3 +101,73 @@ def self_intersections(x, y):
         cross = np.where(col, ovx & ovy, cross)
     out = np.column_stack([i[cross], j[cross]]).astype(np.intp)
     return out[np.lexsort((out[:, 1], out[:, 0]))] if out.size else out
+
+
+def check_simple(c, name="curve", rel=1e-9) -> None:
+    """Raise ``ValueError`` if the node polygon of a curve crosses or touches itself.
+
+    A crossing is a pair of non-adjacent segments that intersect
+    (:func:`self_intersections`, touching included); a touching pair is two nodes that
+    are not neighbours along the curve yet closer than ``rel L``. The message names the
+    closest such pair by node index, parameter ``s`` and position, so the user can see
+    where the curve meets itself.
+
+    Parameters
+    ----------
+    c : Curve
+        (anything with ``positions()``, ``N``, ``grid.s`` and ``length()``).
+    name : str
+        The argument named in the message.
+    rel : float
+        Touching distance relative to the length ``L``.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ValueError
+        The curve crosses or touches itself.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> check_simple(Curve.circle(1.0, Fourier(33)))
+    >>> twice = Curve(np.full(129, 1.0), 4 * np.pi, Fourier(129))  # a circle run round twice
+    >>> check_simple(twice)
+    Traceback (most recent call last):
+    ...
+    ValueError: curve crosses itself: segments 43 and 108 (s = 0.3333 and 0.8372) meet near ...
+    """
+    x, y = c.positions()
+    N = c.N
+    s = c.grid.s
+    cross = self_intersections(x, y)
+    if cross.shape[0]:
+        # the crossing pair whose node midpoints are closest
+        i, j = cross[:, 0], cross[:, 1]
+        mx = 0.5 * (x[i] + x[(i + 1) % N] - x[j] - x[(j + 1) % N])
+        my = 0.5 * (y[i] + y[(i + 1) % N] - y[j] - y[(j + 1) % N])
+        k = int(np.argmin(np.hypot(mx, my)))
+        a, b = int(i[k]), int(j[k])
+        px = 0.25 * (x[a] + x[(a + 1) % N] + x[b] + x[(b + 1) % N])
+        py = 0.25 * (y[a] + y[(a + 1) % N] + y[b] + y[(b + 1) % N])
+        more = f" ({cross.shape[0]} crossing pairs in all)" if cross.shape[0] > 1 else ""
+        raise ValueError(
+            f"{name} crosses itself: segments {a} and {b} (s = {s[a]:.4g} and {s[b]:.4g}) "
+            f"meet near ({px:.4g}, {py:.4g}){more}; equilibria and spectra need a simple "
+            "closed curve")
+    L = c.length()
+    pairs = cKDTree(np.column_stack([x, y])).query_pairs(rel * L, output_type="ndarray")
+    if pairs.size:
+        gap = np.abs(pairs[:, 0] - pairs[:, 1])
+        pairs = pairs[(gap > 1) & (gap < N - 1)]
+    if pairs.size:
+        d = np.hypot(x[pairs[:, 0]] - x[pairs[:, 1]], y[pairs[:, 0]] - y[pairs[:, 1]])
+        a, b = (int(v) for v in sorted(pairs[int(np.argmin(d))]))
+        raise ValueError(
+            f"{name} touches itself: nodes {a} and {b} (s = {s[a]:.4g} and {s[b]:.4g}) are "
+            f"{d.min():.3g} apart near ({x[a]:.4g}, {y[a]:.4g}); equilibria and spectra need "
+            "a simple closed curve")

@@ -1,8 +1,21 @@
-"""Shared test utilities: accurate reference quantities and convergence fits."""
+"""Shared test utilities: test curves and energies, derivative checks, convergence fits,
+reference runs used by several test modules (no test module imports another)."""
+
+import math
+import os
+import time
+from dataclasses import replace
 
 import numpy as np
+from scipy.integrate import solve_ivp
 
 from qsa import Curve, Fourier
+from qsa.energies import FirstOrderEnergy, FunctionalizedCurvature, Perimeter, SecondOrderEnergy
+from qsa.flows import CHA, FacetingFlow, solve_flow
+from qsa.flows.dae import SecondOrderFlow
+from qsa.paper import CONVERGENCE, CHAScenario
+from qsa.resample import resample_closed
+from qsa.studies import npulse_study
 
 
 def fitted_order(Ns, errors):
@@ -103,3 +116,178 @@ def assert_status_convention(result, messages):
     assert result.status in messages, (result.status, sorted(messages))
     assert bool(result.success) == (result.status >= 0), (result.success, result.status)
     assert result.message.startswith(messages[result.status]), result.message
+
+
+def coupled_energy():
+    """A density with a p-k coupling (F10 != 0) and non-quadratic dependence."""
+    return FirstOrderEnergy(
+        F=lambda p, k: 0.01 * p**2 + 0.02 * p * k**2 + np.cosh(0.5 * k),
+        F_p=lambda p, k: 0.02 * p + 0.02 * k**2,
+        F_k=lambda p, k: 0.04 * p * k + 0.5 * np.sinh(0.5 * k),
+        F_pp=lambda p, k: 0.02 + 0 * p,
+        F_pk=lambda p, k: 0.04 * k,
+        F_kk=lambda p, k: 0.04 * p + 0.25 * np.cosh(0.5 * k),
+    )
+
+
+def off_manifold(grid, seed=0):
+    """A smooth, non-closed state: a closed curve plus a perturbation of kappa and g."""
+    c = skew_curve(grid)
+    rng = np.random.default_rng(seed)
+    s = grid.s
+    dk = 0.2 * rng.standard_normal() * np.cos(2 * np.pi * s + rng.uniform()) + 0.1
+    dg = 0.3 * np.sin(4 * np.pi * s + rng.uniform()) * c.g.mean() * 0.2
+    return Curve(c.kappa + dk, c.g + dg, grid, c.theta0, c.origin)
+
+
+def directions(grid, seed):
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(3):
+        v = rng.standard_normal(2 * grid.N)
+        out.append(v / np.linalg.norm(v))
+    s = grid.s
+    out.append(np.concatenate([np.cos(6 * np.pi * s), 0.5 * np.sin(2 * np.pi * s)]))
+    return out
+
+
+def coupled_second_order(placement="node"):
+    """Every partial non-zero somewhere, including the odd couplings F_qp and F_pk."""
+    a, b, c = 0.01, 0.03, 0.02
+
+    def F(q, p, k):
+        return (0.5 * a * q**2 + b * q * p * k + c * q * k**2 + 0.05 * p**2 * k
+                + np.cosh(0.5 * k) + 0.1 * q * np.sin(p))
+
+    def dF(q, p, k):
+        return (a * q + b * p * k + c * k**2 + 0.1 * np.sin(p),
+                b * q * k + 0.1 * p * k + 0.1 * q * np.cos(p),
+                b * q * p + 2 * c * q * k + 0.05 * p**2 + 0.5 * np.sinh(0.5 * k))
+
+    def d2F(q, p, k):
+        return (a + 0 * q, b * k + 0.1 * np.cos(p), b * p + 2 * c * k,
+                0.1 * k - 0.1 * q * np.sin(p), b * q + 0.1 * p, 2 * c * q + 0.25 * np.cosh(0.5 * k))
+
+    return SecondOrderEnergy(F, dF, d2F, placement=placement)
+
+
+def paper_curve(N):
+    """Equal-chord nodes of the convergence study's start (2000 samples resampled)."""
+    x, y, _ = resample_closed(*CONVERGENCE.samples(2000), N, method="chord")
+    return x, y
+
+
+def paper_samples(M=2000):
+    return CONVERGENCE.samples(M)
+
+
+def circle_radius_errors(method, tol, N=48, T=0.5, eps=0.1, beta=1.0, rho=1.5):
+    """Max over snapshots of |R_flow(t) - R_ode(t)| for a regular N-gon under CH + penalty.
+
+    A regular N-gon stays regular and its circumradius R obeys dR/dt = V(R) / cos(pi/N),
+    V the discrete normal velocity on the N-gon: kappa = |D1 X| |D2 X| / L^3 (stencils),
+    D2 kappa = 0, L = 2 N R sin(pi/N).
+    """
+    th = 2 * np.pi * np.arange(N) / N
+    res = solve_flow(CHA(eps=eps, beta=beta, rho=rho), (np.cos(th), np.sin(th)), T, N=N,
+                     tol=tol, method=method, t_eval=np.linspace(0, T, 11))
+    a = 2 * np.pi / N
+    L0 = 2 * N * math.sin(math.pi / N)
+
+    def rhs(t, R):
+        L = 2 * N * R * math.sin(math.pi / N)
+        d1 = R * math.sin(a) * N
+        d2 = 2 * R * (1 - math.cos(a)) * N**2
+        kappa = d1 * d2 / L**3
+        V = eps * 0.5 * kappa**3 - beta * (L - rho * L0) * kappa
+        return V / math.cos(math.pi / N)
+
+    ref = solve_ivp(rhs, (0, T), [1.0], t_eval=res.t, rtol=1e-12, atol=1e-14)
+    assert ref.y[0, -1] > 1.1  # the test has teeth: R moved by much more than 10 tol
+    errors = []
+    for i in range(res.t.size):
+        X, Y = res.positions(i)
+        r = np.hypot(X - X.mean(), Y - Y.mean())
+        assert np.ptp(r) < 1e-8  # still a circle
+        errors.append(abs(r.mean() - ref.y[0, i]))
+    return max(errors), res
+
+
+def fd_jacobian(S, x, h=1e-6):
+    """Central differences of ``S.residual`` (an equilibrium system) at ``x``."""
+    J = np.zeros((x.size, x.size))
+    for i in range(x.size):
+        e = np.zeros(x.size)
+        e[i] = h * max(1.0, abs(x[i]))
+        J[:, i] = (S.residual(x + e) - S.residual(x - e)) / (2 * e[i])
+    return J
+
+
+def assert_quadratic_convergence(r, bound=1e3):
+    """r_{k+1} / r_k^2 bounded while r_{k+1} is above the round-off floor."""
+    h = np.asarray(r.history)
+    assert h[-1] <= 1e-10
+    floor = 100 * r.noise_floor
+    ratios = [h[k + 1] / h[k] ** 2 for k in range(len(h) - 1) if h[k + 1] > floor]
+    assert len(ratios) >= 2
+    assert max(ratios) < bound, ratios
+    # and the last steps gain orders of magnitude
+    assert h[-1] < 1e-3 * h[-3]
+
+
+def slow_study(n_pulses=3, alpha=0.1, delay=0.0):
+    """npulse_study that takes at least ``delay`` seconds (so a run can be killed mid-way)."""
+    time.sleep(delay)
+    out = npulse_study(n_pulses=n_pulses, alpha=alpha)
+    out["pid"] = os.getpid()
+    return out
+
+
+def smooth_curve(N, scale=1.3, shift=0.05):
+    """Equal-chord nodes of a smooth non-symmetric curve (no symmetry left)."""
+    th = 2 * np.pi * np.arange(1000) / 1000
+    r = 1 + 0.1 * np.cos(3 * th) + 0.05 * np.sin(2 * th)
+    x, y, _ = resample_closed(scale * r * np.cos(th) + shift, scale * r * np.sin(th), N,
+                              method="chord")
+    return x, y
+
+
+class SexticWell:
+    """A user well (not the quartic default) to exercise the ``well=`` path."""
+
+    def W(self, k):
+        return 0.25 * k**2 * (k - 2.0) ** 2 + 0.01 * k**6
+
+    def dW(self, k):
+        return 0.5 * k * (k - 2.0) * (2 * k - 2.0) + 0.06 * k**5
+
+    def d2W(self, k):
+        return 0.5 * (6 * k**2 - 12 * k + 4.0) + 0.3 * k**4
+
+
+#: The DAE flow models the flow tests run (adhesion variants, faceting with a user well).
+FLOW_MODELS = {
+    "cha-neighbours": CHA(**CONVERGENCE.model_params()),
+    "cha-dense": CHA(**CONVERGENCE.model_params(), adhesion_method="dense"),
+    "cha-centred-normal": CHA(**CONVERGENCE.model_params(), force_normal="centred"),
+    "cha-short-kernel": replace(CHAScenario(), l_star=0.35).model(),
+    "ch-no-adhesion": CHA(eps=0.1, beta=1.0, rho=1.5),
+    "facet": FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0),
+    "facet-user-well": FacetingFlow(alpha=0.2, kstar=2.0, beta=1.0, L_star=7.0,
+                                    well=SexticWell()),
+    "second-order": SecondOrderFlow(FunctionalizedCurvature(0.3, 1.0, 2.0)
+                                    + Perimeter(5.0, 6.0)),
+}
+
+
+def numerical_jacobians(sys, y, ydot, d=1e-6):
+    """Central differences ``(dF/dy, dF/dydot)`` of a DAE system's residual at ``(y, ydot)``."""
+    n = sys.size
+    Jy = np.zeros((n, n))
+    Jd = np.zeros((n, n))
+    for k in range(n):
+        e = np.zeros(n)
+        e[k] = d
+        Jy[:, k] = (sys.residual(y + e, ydot) - sys.residual(y - e, ydot)) / (2 * d)
+        Jd[:, k] = (sys.residual(y, ydot + e) - sys.residual(y, ydot - e)) / (2 * d)
+    return Jy, Jd

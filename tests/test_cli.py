@@ -39,6 +39,10 @@ def test_demo_writes_summary_and_figures(tmp_path, capsys):
     assert s["kernel"]["lagrange_kernel"] < 1e-6 and s["max_imag"] < 1e-8
     sp = summary["splice"]
     assert sp["closure"] < 1e-12 and sp["n_small"] == sp["n_small_expected"] == 5
+    # the facets reported (and in the figure's title) are those of the curve: the closing
+    # facets for these angles, close to the requested 0.9, 1.0, 1.1 but not equal
+    assert sp["facets_requested"] == [0.9, 1.0, 1.1] and sp["facets"] != [0.9, 1.0, 1.1]
+    assert sp["facets"] == pytest.approx([0.9, 1.0, 1.1], abs=5e-3)
     assert sp["separation"] > 100
     f = summary["flow"]
     assert f["success"] and f["relative_error"] < 0.02  # DAE decay rate = eigenvalue of J

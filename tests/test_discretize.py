@@ -83,3 +83,11 @@ def test_even_fourier_refused():
 def test_mismatched_array_refused():
     with pytest.raises(ValueError, match="shape"):
         FiniteDifference(16).cumulative(np.ones(15))
+
+
+@pytest.mark.parametrize("grid", [FiniteDifference(17), Fourier(17)], ids=["fd", "fourier"])
+def test_cumulative_transpose_is_the_transpose(grid):
+    V = np.random.default_rng(1).standard_normal((grid.N, 2))
+    C = grid.cumulative_matrix()
+    assert np.allclose(grid.cumulative_transpose(V), C.T @ V, atol=1e-14)
+    assert np.allclose(grid.cumulative_transpose(V[:, 0]), C.T @ V[:, 0], atol=1e-14)

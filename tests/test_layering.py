@@ -28,6 +28,7 @@ FORBIDDEN = {
     "closure": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "curve": {"geometry", "energies", "equilibria", "spectra", "flows", "continuation"},
     "discretize": {"curve", "geometry", "energies", "equilibria", "spectra", "flows"},
+    "measures": {"energies", "equilibria", "spectra", "flows", "continuation"},
     "polygon": {"discretize", "curve", "geometry", "energies", "equilibria", "spectra", "flows"},
     "plotting": set(),
 }
@@ -80,3 +81,52 @@ def test_lower_layers_do_not_import_upper_ones(part):
 def test_the_parser_sees_imports():
     # a check of the check: the continuation uses both layers below it
     assert {"equilibria", "spectra", "energies"} <= import_table()["continuation"]
+
+
+#: what a function of qsa may import inside its body: optional dependencies, and the
+#: compiled kernels that need one (numba)
+LAZY_ALLOWED = {"tqdm", "dask", "distributed", "numba", "qsa.reduction._kernels"}
+
+
+def _function_imports(path: Path):
+    tree = ast.parse(path.read_text(), str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for sub in ast.walk(node):
+                if isinstance(sub, ast.Import):
+                    yield from ((a.name, sub.lineno) for a in sub.names)
+                elif isinstance(sub, ast.ImportFrom):
+                    base = "." * sub.level + (sub.module or "")
+                    if base == "qsa.reduction":  # from qsa.reduction import _kernels
+                        yield from ((f"{base}.{a.name}", sub.lineno) for a in sub.names)
+                    else:
+                        yield base, sub.lineno
+
+
+def test_imports_sit_at_module_top():
+    """Except optional dependencies and the command line's lazy loading of subcommands."""
+    bad = []
+    for path in sorted(ROOT.rglob("*.py")):
+        rel = path.relative_to(ROOT)
+        if rel.parts[0] == "commands" or rel.name == "cli.py":
+            continue
+        for name, line in _function_imports(path):
+            if not any(name == a or name.startswith(a + ".") for a in LAZY_ALLOWED):
+                bad.append(f"qsa/{rel}:{line} imports {name}")
+    assert not bad, "\n".join(bad)
+
+
+def test_no_test_module_imports_another():
+    """Shared test code lives in tests/helpers.py, tests/reference/ and conftest.py."""
+    tests = Path(__file__).parent
+    bad = []
+    for path in sorted(tests.rglob("*.py")):
+        tree = ast.parse(path.read_text(), str(path))
+        for node in ast.walk(tree):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            for name in names:
+                if name.startswith("tests.") and not (
+                        name == "tests.helpers" or name.startswith("tests.reference")):
+                    bad.append(f"{path.relative_to(tests)}:{node.lineno} imports {name}")
+    assert not bad, "\n".join(bad)

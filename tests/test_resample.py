@@ -2,6 +2,9 @@ import numpy as np
 import pytest
 
 from qsa.resample import closed_samples, resample_closed
+from tests.reference import load
+
+CLOSED_FORMS = load("closed_forms")
 
 
 def ellipse(M, a=1.0, b=2.0):
@@ -16,9 +19,8 @@ def test_equal_arclength_and_chord():
         ch = np.hypot(np.diff(np.append(X, X[0])), np.diff(np.append(Y, Y[0])))
         assert np.ptp(ch) < 1e-10 * ch.mean()
         assert (X[0], Y[0]) == pytest.approx((x[0], y[0]))
-    # ellipse perimeter (a=1, b=2) = 9.688448220547675...
     _, _, L = resample_closed(x, y, 50, interpolant="fourier")
-    assert abs(L - 9.688448220547675) < 1e-10
+    assert abs(L - CLOSED_FORMS["ellipse_perimeter_a1_b2"]["value"]) < 1e-10
 
 
 def test_repeated_endpoint_dropped():

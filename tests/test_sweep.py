@@ -22,6 +22,7 @@ from qsa.sweep import (
     read_table,
     run_sweep,
 )
+from tests.helpers import slow_study
 
 ROOT = Path(__file__).resolve().parents[1]
 # 16 points of the headline study (4 alphas x 4 pulse counts, all existing: N alpha < 1),
@@ -39,14 +40,6 @@ def headline_study():
     except ImportError:  # pragma: no cover
         pass
     return npulse_study
-
-
-def slow_study(n_pulses=3, alpha=0.1, delay=0.0):
-    """npulse_study that takes at least ``delay`` seconds (so a run can be killed mid-way)."""
-    time.sleep(delay)
-    out = npulse_study(n_pulses=n_pulses, alpha=alpha)
-    out["pid"] = os.getpid()
-    return out
 
 
 def failing_study(x=0.0):
@@ -166,7 +159,7 @@ def _stored(points):
 def test_sigkill_then_resume_computes_only_missing_points(tmp_path):
     out = tmp_path / "sw"
     specs = ["alpha=0.08:0.2:3", "n_pulses=2,3,4", "delay=0.4"]
-    code = ("import sys; from tests.test_sweep import slow_study; from qsa.sweep import run_sweep;"
+    code = ("import sys; from tests.helpers import slow_study; from qsa.sweep import run_sweep;"
             f"run_sweep(slow_study, {specs!r}, {str(out)!r}, workers=2, progress=False)")
     proc = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)

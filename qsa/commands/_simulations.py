@@ -2,34 +2,81 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 
+from qsa.commands._options import int_at_least, nonnegative_float, positive_float
 
-def common_arguments(parser, default_out):
-    parser.add_argument("--out", default=default_out,
+
+def check_resume(args, stems):
+    """Warn when ``--resume`` finds no checkpoint for a run (it then starts afresh)."""
+    from qsa.commands._errors import warn
+
+    if not args.resume:
+        return
+    for stem in stems:
+        path = os.path.join(args.out, f"{stem}_checkpoint.npz")
+        if not os.path.isfile(path):
+            warn(args, f"--resume: no checkpoint {path}; starting that run from t = 0")
+
+
+def start_note(args, what):
+    """Say on stderr what a long run does and where its checkpoint goes, before it starts."""
+    from qsa.commands._errors import note
+
+    bar = "" if args.progress is False else "; a progress bar on a terminal"
+    note(args, f"{what}: checkpoints in {args.out}/ (Ctrl-C saves one; continue with "
+               f"--resume){bar}")
+
+
+def resume_hint(args, checkpoint):
+    """How ``qsa reproduce`` continues an interrupted run (the checkpoint lives in --out)."""
+    return f"{args.qsa_prog} --resume --out {args.out} (and the other options as before)"
+
+
+def common_arguments(parser, default_out, t_final_help=None):
+    """Options of the paper's simulations: output folder, final time, resume, progress.
+
+    ``t_final_help`` states the default final time (e.g. ``"2.5, the paper's last
+    figure time"``); give the number, so that ``--help`` says what the run does.
+    """
+    if t_final_help is None:
+        t_final_help = "the scenario's t_final"
+    parser.add_argument("--out", default=default_out, metavar="DIR",
                         help=f"output folder for data, figures and checkpoints "
                              f"(default ./{default_out})")
-    parser.add_argument("--t-final", type=float, default=None,
-                        help="final time (default: the paper's)")
+    parser.add_argument("--t-final", type=positive_float, default=None,
+                        help=f"final time (default {t_final_help})")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from its checkpoint in --out")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="progress bar (default: only on a terminal)")
     parser.add_argument("--no-plots", action="store_true", help="skip the figures")
     parser.add_argument("--plot", metavar="FILE", help="also write the main figure to FILE")
     parser.add_argument("--json", action="store_true", help="JSON summary on stdout")
+    parser.set_defaults(resume_hint=resume_hint)
 
 
 def cha_arguments(parser):
     """Options shared by ``qsa reproduce snowflake`` and ``folding``."""
-    parser.add_argument("--N", type=int, default=None, help="nodes (default 2400)")
-    parser.add_argument("--noise", type=float, default=0.0,
-                        help="relative radial noise in modes 1-30 that breaks the 13-fold "
-                             "symmetry (default 0: the exact crenellated curve)")
-    parser.add_argument("--seed", type=int, default=1, help="noise seed (default 1)")
-    parser.add_argument("--l-star", type=float, default=0.01,
-                        help="kernel length l* (default 0.01, Table T1 as printed; 0.1 "
-                             "gives the paper's labyrinths and layers, see CHAScenario)")
+    from qsa.paper.scenarios import CHAScenario
+
+    sc = CHAScenario()
+    lo, hi = sc.noise_modes
+    parser.add_argument("--N", type=int_at_least(8), default=None,
+                        help=f"nodes (default {sc.N})")
+    parser.add_argument("--noise", type=nonnegative_float, default=sc.noise,
+                        help=f"relative radial noise in modes {lo}-{hi} that breaks the "
+                             f"{sc.lobes}-fold symmetry (default %(default)g: the exact "
+                             "crenellated curve)")
+    parser.add_argument("--seed", type=int, default=sc.seed,
+                        help="noise seed (default %(default)s)")
+    parser.add_argument("--kernel-length", "--l-star", dest="l_star", metavar="LENGTH",
+                        type=positive_float, default=sc.l_star,
+                        help="adhesion kernel length l* (default %(default)g, Table T1 as "
+                             "printed; 0.1 gives the paper's labyrinths and layers, see "
+                             "CHAScenario)")
 
 
 def cha_scenario(args, rho):
@@ -42,7 +89,8 @@ def cha_scenario(args, rho):
 
 
 def progress(args):
-    return False if args.no_progress or args.json else None
+    """``--progress`` (default None: a bar only when stderr is a terminal)."""
+    return args.progress
 
 
 def save_figures(figures, out, stem, plot=None, main=None):

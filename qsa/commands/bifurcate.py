@@ -1,4 +1,4 @@
-"""``qsa bifurcate npulse|splice|circle``: a branch of equilibria, its bifurcations, the switched branches.
+"""``qsa bifurcate npulse|splice|circle|ring``: a branch, its bifurcations, the switched branches.
 
 Builds the starting equilibrium exactly as ``qsa equilibrium`` does (same options),
 follows it in ``--param`` (``L_star``, ``alpha`` or ``beta`` of Faceting + Perimeter) to
@@ -11,6 +11,8 @@ Examples
 ``qsa bifurcate circle --radius 1 --alpha 0.1 --N 33 --param L_star --stop 5.4 --step 0.05``
 ``qsa bifurcate circle --radius 0.95 --alpha 0.1 --N 33 --stop 5.45 --switch 1 --out ring/``
 ``qsa bifurcate npulse --pulses 3 --alpha 0.2 --param alpha --stop 0.3 --json --plot d.png``
+``qsa bifurcate ring --eps 1 --N 65 --stop -10 --switch --switch-span -40 0 --out ring/``
+(the pressurized inextensible ring: CanhamHelfrich + Pressure(p) at fixed length)
 """
 
 from __future__ import annotations
@@ -23,9 +25,11 @@ from qsa.commands import equilibrium
 PARAMS = ("L_star", "alpha", "beta")
 
 
-def _extra(q):
-    q.add_argument("--param", choices=PARAMS, default="L_star",
-                   help="the continuation parameter of Faceting + Perimeter (default L_star)")
+def _extra(q, faceting=True):
+    if faceting:
+        q.add_argument("--param", choices=PARAMS, default="L_star",
+                       help="the continuation parameter of Faceting + Perimeter (default "
+                            "L_star)")
     q.add_argument("--stop", type=float, required=True, help="end of the parameter range")
     q.add_argument("--step", type=float, default=None,
                    help="first arclength step (default 1/20 of the range)")
@@ -42,7 +46,16 @@ def _extra(q):
 def add_parser(sub):
     p = sub.add_parser("bifurcate", help="continuation with stability, bifurcations, switching",
                        description=__doc__.split("\n\n")[0])
-    equilibrium.add_kinds(p, run, extra=_extra)
+    kinds = equilibrium.add_kinds(p, run, extra=_extra)
+    q = kinds.add_parser("ring", help="the pressurized inextensible ring: CanhamHelfrich(eps) "
+                                      "+ Pressure(p) at fixed length, from the circle, in p")
+    q.add_argument("--eps", type=float, default=1.0, help="bending rigidity (default 1)")
+    q.add_argument("--radius", type=float, default=1.0, help="radius of the circle (default 1)")
+    q.add_argument("--N", type=int, default=65, help="Fourier nodes (default 65)")
+    q.add_argument("--json", action="store_true", help="JSON summary on stdout")
+    q.add_argument("--plot", metavar="FILE", help="write the diagram to FILE")
+    _extra(q, faceting=False)
+    q.set_defaults(func=run, param="p")
     return p
 
 
@@ -77,18 +90,35 @@ def _select(main, picks):
     return out
 
 
+def _ring(args):
+    from qsa import Curve, Fourier
+    from qsa.constraints import FixedLength
+    from qsa.energies import CanhamHelfrich, Pressure
+
+    if not args.eps > 0 or not args.radius > 0:
+        raise ValueError("--eps and --radius must be positive")
+    eps = args.eps
+    return Curve.circle(args.radius, Fourier(args.N)), (lambda p: CanhamHelfrich(eps)
+                                                        + Pressure(p)), 0.0, [FixedLength()]
+
+
 def run(args):
     from qsa.continuation import continuation, save_branches, switch_branch
 
     try:
-        eq = equilibrium.build_polished(args)
-        factory, start = _family(eq, args.param)
+        if args.kind == "ring":
+            curve, factory, start, constraints = _ring(args)
+            eq = None
+        else:
+            eq = equilibrium.build_polished(args)
+            curve, constraints = eq.curve, None
+            factory, start = _family(eq, args.param)
         if args.stop == start:
             raise ValueError(f"--stop equals the start value {args.param}={start:g}")
         step = args.step if args.step is not None else abs(args.stop - start) / 20
         step = abs(step) if args.stop > start else -abs(step)
-        main = continuation(factory, eq.curve, args.param, (start, args.stop, step),
-                            max_steps=args.max_steps)
+        main = continuation(factory, curve, args.param, (start, args.stop, step),
+                            constraints=constraints, max_steps=args.max_steps)
         branches = [main]
         if args.switch is not None:
             span = tuple(args.switch_span) if args.switch_span else (
@@ -97,9 +127,10 @@ def run(args):
                 branches += switch_branch(main, bif, span=span + (abs(step),),
                                           max_steps=args.max_steps)
     except KeyboardInterrupt:
-        print(f"qsa bifurcate: interrupted", file=sys.stderr)
+        print("qsa bifurcate: interrupted", file=sys.stderr)
         return 130
-    summary = {"equilibrium": eq.summary(), "branches": [b.summary() for b in branches]}
+    summary = {"equilibrium": None if eq is None else eq.summary(),
+               "branches": [b.summary() for b in branches]}
     if args.out:
         summary["files"] = save_branches(branches, args.out)
     if args.plot:

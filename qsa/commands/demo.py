@@ -43,7 +43,8 @@ def run(args):
               f"(expected {s['kernel']['expected_kernel_dimension']}), "
               f"|L_Lambda (d_s kappa, 0)| = {s['kernel']['lagrange_kernel']:.1e}")
         sp = summary["splice"]
-        print(f"splice (facets {sp['facets']}): |C(U)| = {sp['closure']:.1e}, "
+        facets = ", ".join(f"{f:.4g}" for f in sp["facets"])
+        print(f"splice (facets {facets}): |C(U)| = {sp['closure']:.1e}, "
               f"{sp['n_small']} small eigenvalues (expected {sp['n_small_expected']}), |largest| = "
               f"{max(abs(v) for v in sp['small_eigenvalues']):.2e}, first fast = "
               f"{sp['first_fast_eigenvalue']:.4g}")

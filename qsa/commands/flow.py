@@ -3,9 +3,14 @@
 Examples
 --------
 ``qsa flow cha --N 100 --t-final 0.2 --tol 1e-4 --out run-cha``  (the appendix example)
-``qsa flow facet --alpha 0.1 --kstar 5 --beta 5 --L-star 8 --shape wobbly --lobes 9 --N 600``
+``qsa flow facet --alpha 0.1 --kstar 5 --beta 5 --preferred-length 8 --shape wobbly --lobes 9``
 ``qsa flow cha --resume run-cha/checkpoint.npz --t-final 0.4``
+``qsa flow facet --init eq.npz --t-final 0.01``  (from ``qsa equilibrium ... --save eq.npz``)
 ``qsa flow facet --shape wobbly --lobes 7 --N 200 --t-final 0.02 --movie facet.gif``
+
+A resumed run takes its model, grid, method and tolerance from the checkpoint:
+options that contradict it are refused, options about the initial curve are
+ignored with a warning.
 """
 
 from __future__ import annotations
@@ -15,87 +20,247 @@ import os
 
 import numpy as np
 
+from qsa.commands._errors import note, warn
+from qsa.commands._options import (
+    finite_float,
+    int_at_least,
+    nonnegative_float,
+    positive_float,
+)
+
+#: Model options of each subcommand (dest -> default) and the model field they set.
+MODEL_DEFAULTS = {
+    "cha": {"eps": 0.1, "beta": 1.0, "rho": 1.5, "A0": 10.0, "l_star": 0.5, "a": 1.0},
+    "facet": {"alpha": 0.1, "kstar": 5.0, "beta": 5.0, "L_star": None},
+}
+#: Run options (dest -> default) shared by both models; ``t_final`` by model.
+RUN_DEFAULTS = {"N": 100, "tol": 1e-4, "method": "be"}
+T_FINAL = {"cha": 0.2, "facet": 1e-3}
+#: Options about the initial curve (ignored, with a warning, by ``--resume``).
+INITIAL_OPTIONS = ("init", "shape", "radius", "amp", "lobes")
+INITIAL_DEFAULTS = {"shape": "paper", "radius": 1.0, "amp": 0.05, "lobes": 5}
+_MODEL_NAMES = {"cha": "CHA", "facet": "FacetingFlow"}
+
 
 def add_parser(sub):
     p = sub.add_parser("flow", help="run a curve flow (CHA or faceting): data + figures",
                        description=__doc__.split("\n\n")[0])
     models = p.add_subparsers(dest="model", metavar="MODEL", required=True)
+    d = MODEL_DEFAULTS["cha"]
     q = models.add_parser("cha", help="Canham-Helfrich + length penalty + adhesion")
-    q.add_argument("--eps", type=float, default=0.1, help="bending rigidity (default 0.1)")
-    q.add_argument("--beta", type=float, default=1.0, help="length penalty (default 1)")
-    q.add_argument("--rho", type=float, default=1.5, help="precompression (default 1.5)")
-    q.add_argument("--A0", type=float, default=10.0, help="adhesion strength; 0 = off (10)")
-    q.add_argument("--l-star", type=float, default=0.5, help="kernel width (default 0.5)")
-    q.add_argument("--a", type=float, default=1.0, help="kernel shape (default 1)")
-    _common(q, t_final=0.2)
+    q.add_argument("--eps", type=positive_float, help=f"bending rigidity (default {d['eps']:g})")
+    q.add_argument("--beta", type=nonnegative_float,
+                   help=f"length penalty (default {d['beta']:g})")
+    q.add_argument("--rho", type=positive_float, help=f"precompression (default {d['rho']:g})")
+    q.add_argument("--A0", type=nonnegative_float,
+                   help=f"adhesion strength; 0 = off (default {d['A0']:g})")
+    q.add_argument("--kernel-length", "--l-star", dest="l_star", metavar="LENGTH",
+                   type=positive_float, help=f"adhesion kernel length l* (default {d['l_star']:g})")
+    q.add_argument("--a", type=positive_float, help=f"kernel shape (default {d['a']:g})")
+    _common(q, "cha")
+    d = MODEL_DEFAULTS["facet"]
     q = models.add_parser("facet", help="the faceting flow (e:Facet-NV)")
-    q.add_argument("--alpha", type=float, default=0.1, help="front width (default 0.1)")
-    q.add_argument("--kstar", type=float, default=5.0, help="second well (default 5)")
-    q.add_argument("--beta", type=float, default=5.0, help="length penalty (default 5)")
-    q.add_argument("--L-star", type=float, default=None,
-                   help="preferred length (default: 1.2 x the initial length)")
-    _common(q, t_final=1e-3)
+    q.add_argument("--alpha", type=positive_float, help=f"front width (default {d['alpha']:g})")
+    q.add_argument("--kstar", type=positive_float,
+                   help=f"second well kappa* (default {d['kstar']:g})")
+    q.add_argument("--beta", type=nonnegative_float,
+                   help=f"length penalty (default {d['beta']:g})")
+    q.add_argument("--preferred-length", "--L-star", dest="L_star", metavar="LENGTH",
+                   type=positive_float,
+                   help="preferred length L* of the length penalty (default: the "
+                        "equilibrium's with --init EQ.npz, else 1.2 x the initial length)")
+    _common(q, "facet")
     return p
 
 
-def _common(q, t_final):
-    q.add_argument("--shape", choices=["paper", "wobbly", "circle"], default="paper",
+def _common(q, model):
+    q.add_argument("--shape", choices=["paper", "wobbly", "circle"],
                    help="initial curve: the appendix trillium r = 1 + 0.35 cos 3t (+0.05 sin 4t "
-                        "in x), a wobbly circle r = R(1 + amp cos(lobes t)), or a circle")
-    q.add_argument("--radius", type=float, default=1.0, help="R of wobbly/circle (default 1)")
-    q.add_argument("--amp", type=float, default=0.05, help="wobble amplitude (default 0.05)")
-    q.add_argument("--lobes", type=int, default=5, help="wobble lobes (default 5)")
+                        "in x; default), a wobbly circle r = R(1 + amp cos(lobes t)), or a "
+                        "circle")
+    q.add_argument("--radius", type=positive_float,
+                   help=f"R of wobbly/circle (default {INITIAL_DEFAULTS['radius']:g})")
+    q.add_argument("--amp", type=finite_float,
+                   help=f"wobble amplitude (default {INITIAL_DEFAULTS['amp']:g})")
+    q.add_argument("--lobes", type=int_at_least(1),
+                   help=f"wobble lobes (default {INITIAL_DEFAULTS['lobes']})")
     q.add_argument("--init", metavar="FILE",
-                   help="initial curve from a text file of x y rows (overrides --shape)")
-    q.add_argument("--N", type=int, default=100, help="nodes (default 100)")
-    q.add_argument("--t-final", type=float, default=t_final, help=f"final time ({t_final:g})")
-    q.add_argument("--tol", type=float, default=1e-4, help="local error tolerance (1e-4)")
-    q.add_argument("--method", choices=["be", "bdf2"], default="be",
-                   help="backward Euler with step doubling (paper) or BDF2")
-    q.add_argument("--snapshots", type=int, default=None,
-                   help="snapshots saved (default 6; 60 with --movie)")
-    q.add_argument("--out", default=None, help="folder for result.npz, summary.json, flow.png")
-    q.add_argument("--checkpoint", default=None,
-                   help="checkpoint file (default OUT/checkpoint.npz when --out is given)")
-    q.add_argument("--resume", default=None, metavar="CHECKPOINT", help="continue a run")
-    q.add_argument("--no-progress", action="store_true", help="no progress bar")
+                   help="initial curve (overrides --shape): a text file of x y rows, or a "
+                        "qsa file: an equilibrium or spectrum (--save), a flow result or "
+                        "checkpoint (its last state)")
+    q.add_argument("--N", type=int_at_least(8),
+                   help=f"nodes (default {RUN_DEFAULTS['N']}; on --resume the checkpoint's)")
+    q.add_argument("--t-final", type=positive_float,
+                   help=f"final time (default {T_FINAL[model]:g}; on --resume the "
+                        "checkpoint's)")
+    q.add_argument("--tol", type=positive_float,
+                   help=f"local error tolerance (default {RUN_DEFAULTS['tol']:g})")
+    q.add_argument("--method", choices=["be", "bdf2"],
+                   help="backward Euler with step doubling (the paper's; default) or BDF2")
+    q.add_argument("--snapshots", type=int_at_least(2), default=None,
+                   help="snapshots saved, the initial and final states included "
+                        "(default 6; 60 with --movie)")
+    q.add_argument("--out", metavar="DIR",
+                   help="folder for result.npz, summary.json, flow.png and checkpoint.npz")
+    q.add_argument("--checkpoint", metavar="FILE", default=None,
+                   help="checkpoint file (default DIR/checkpoint.npz with --out)")
+    q.add_argument("--resume", default=None, metavar="CHECKPOINT",
+                   help="continue the run saved in CHECKPOINT")
+    q.add_argument("--progress", action=_bool_action(), default=None,
+                   help="progress bar (default: only on a terminal)")
+    q.add_argument("--no-plots", action="store_true", help="no figure in --out")
     q.add_argument("--json", action="store_true", help="JSON summary on stdout")
     q.add_argument("--plot", metavar="FILE", help="write the figure to FILE")
     q.add_argument("--movie", metavar="FILE",
                    help="write an animation of the snapshots to FILE.gif (Pillow) or "
                         "FILE.mp4 (needs ffmpeg)")
-    q.add_argument("--fps", type=float, default=10.0, help="movie frames per second (10)")
-    q.set_defaults(func=run)
+    q.add_argument("--fps", type=positive_float, default=10.0,
+                   help="movie frames per second (default %(default)g)")
+    q.set_defaults(func=run, resume_hint=resume_hint)
+
+
+def resume_hint(args, checkpoint):
+    """The command that continues an interrupted flow."""
+    out = f" --out {args.out}" if args.out else ""
+    return f"{args.qsa_prog} --resume {checkpoint}{out}"
+
+
+def _bool_action():
+    import argparse
+
+    return argparse.BooleanOptionalAction
+
+
+# ---------------------------------------------------------------- initial data
+def read_initial_file(path):
+    """Closed samples ``(x, y)`` and the equilibrium (or None) of an ``--init`` file.
+
+    A qsa ``.npz`` file gives its curve (an equilibrium's or spectrum's) or its last
+    state (a flow result or checkpoint); any other file is read as text rows ``x y``.
+
+    Raises
+    ------
+    ValueError
+        Unreadable rows, not two columns, fewer than 4 points, a NaN or inf (the
+        message names the file and the row).
+    """
+    with open(path, "rb") as fh:
+        magic = fh.read(4)
+    if magic == b"PK\x03\x04":  # a zip archive: a qsa file
+        from qsa.flows import FlowResult
+        from qsa.io import load, load_equilibrium, load_npz
+
+        kind = load_npz(path)[1].get("kind", "")
+        if kind in ("qsa.equilibrium", "qsa.spectrum"):
+            eq = load_equilibrium(path)
+            x, y = eq.curve.positions()
+            return (x, y), eq
+        result = load(path)
+        if isinstance(result, FlowResult):
+            return (result.x, result.y), None
+        raise ValueError(f"--init {path}: a {kind} file holds no curve")
+    try:
+        data = np.loadtxt(path, ndmin=2)
+    except ValueError as exc:
+        raise ValueError(f"--init {path}: cannot read rows of two numbers x y ({exc})") from None
+    if data.shape[1] != 2:
+        raise ValueError(f"--init {path}: expected two columns x y, found {data.shape[1]}")
+    bad = np.nonzero(~np.all(np.isfinite(data), axis=1))[0]
+    if bad.size:
+        raise ValueError(f"--init {path}: row {bad[0] + 1} is {data[bad[0]].tolist()} (NaN or "
+                         f"inf); every row must be a finite point x y")
+    if data.shape[0] < 4:
+        raise ValueError(f"--init {path}: {data.shape[0]} points; a closed curve needs at "
+                         "least 4")
+    return (data[:, 0], data[:, 1]), None
 
 
 def initial_curve(args, M=4000):
-    """Samples of the requested initial curve (closed, counter-clockwise)."""
+    """Samples ``(x, y)`` of the requested initial curve and its equilibrium (or None)."""
     if args.init:
-        data = np.loadtxt(args.init, ndmin=2)
-        if data.shape[1] != 2:
-            raise ValueError(f"--init {args.init}: expected two columns x y")
-        return data[:, 0], data[:, 1]
+        return read_initial_file(args.init)
+    shape = args.shape or INITIAL_DEFAULTS["shape"]
+    radius = INITIAL_DEFAULTS["radius"] if args.radius is None else args.radius
+    amp = INITIAL_DEFAULTS["amp"] if args.amp is None else args.amp
+    lobes = INITIAL_DEFAULTS["lobes"] if args.lobes is None else args.lobes
     th = 2 * np.pi * np.arange(M) / M
-    if args.shape == "paper":
+    if shape == "paper":
         r = 1 + 0.35 * np.cos(3 * th)
-        return r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th)
-    r = args.radius * (1 + (args.amp * np.cos(args.lobes * th) if args.shape == "wobbly" else 0))
-    return r * np.cos(th), r * np.sin(th)
+        return (r * np.cos(th) + 0.05 * np.sin(4 * th), r * np.sin(th)), None
+    r = radius * (1 + (amp * np.cos(lobes * th) if shape == "wobbly" else 0))
+    return (r * np.cos(th), r * np.sin(th)), None
 
 
-def build_model(args, xy):
+def _length(xy):
+    x, y = xy
+    return float(np.sum(np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)))
+
+
+def build_model(args, xy, eq=None):
+    """The flow model of the command line (defaults: :data:`MODEL_DEFAULTS`).
+
+    For ``facet`` from an equilibrium file, alpha, kappa*, beta and L* default to
+    the equilibrium's, so the flow starts at a (discrete) rest point.
+    """
     from qsa.flows import CHA, FacetingFlow
 
+    values = {k: getattr(args, k) for k in MODEL_DEFAULTS[args.model]}
     if args.model == "cha":
-        return CHA(eps=args.eps, beta=args.beta, rho=args.rho, A0=args.A0, l_star=args.l_star,
-                   a=args.a)
-    L_star = args.L_star
-    if L_star is None:
-        x, y = xy
-        L_star = 1.2 * float(np.sum(np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)))
-    return FacetingFlow(alpha=args.alpha, kstar=args.kstar, beta=args.beta, L_star=L_star)
+        return CHA(**{k: MODEL_DEFAULTS["cha"][k] if v is None else v
+                      for k, v in values.items()})
+    from_eq = dict(eq.params) if eq is not None else {}
+    for k, v in values.items():
+        if v is None:
+            values[k] = from_eq.get(k, MODEL_DEFAULTS["facet"][k])
+    if values["L_star"] is None:
+        values["L_star"] = 1.2 * _length(xy)
+    return FacetingFlow(**values)
 
 
+# ---------------------------------------------------------------------- resume
+def resume_plan(args):
+    """Model, N, tol, method and t_final of ``--resume``, with the options checked.
+
+    Options that contradict the checkpoint are errors naming the option; options
+    about the initial curve are ignored with a warning.
+    """
+    from qsa._codecs import model_from_metadata
+    from qsa.io import load_npz
+
+    path = args.resume
+    arrays, meta = load_npz(path)
+    if meta.get("kind") != "qsa.flow-checkpoint":
+        raise ValueError(f"--resume {path}: not a flow checkpoint (kind "
+                         f"{meta.get('kind')!r})")
+    saved = meta["model"]
+    if saved.get("model") != _MODEL_NAMES[args.model]:
+        other = {v: k for k, v in _MODEL_NAMES.items()}.get(saved.get("model"), "?")
+        raise ValueError(f"--resume {path}: a checkpoint of a {saved.get('model')} flow; "
+                         f"continue it with qsa flow {other} --resume {path}")
+    t_saved = float(meta["integrator"]["t"])
+    checks = {k: saved.get(k) for k in MODEL_DEFAULTS[args.model]}
+    checks.update({"N": int(arrays["x_setup"].size), "tol": meta["options"]["tol"],
+                   "method": meta["options"]["method"]})
+    for dest, value in checks.items():
+        given = getattr(args, dest)
+        if given is not None and given != value:
+            flag = "--" + dest.replace("_", "-")
+            raise ValueError(f"{flag} {given}: the checkpoint {path} was written with "
+                             f"{dest}={value}; a resumed run keeps it (leave {flag} out)")
+    for dest in INITIAL_OPTIONS:
+        if getattr(args, dest) is not None:
+            warn(args, f"--{dest} ignored: a resumed run continues from the state in {path}")
+    t_final = meta.get("t_final") if args.t_final is None else args.t_final
+    if t_final < t_saved * (1 - 1e-12):
+        raise ValueError(f"--t-final {t_final:g}: the checkpoint {path} is at t = "
+                         f"{t_saved:g}; a resumed run continues forward (give --t-final "
+                         f">= {t_saved:g})")
+    return {"model": model_from_metadata(saved), "N": checks["N"], "tol": checks["tol"],
+            "method": checks["method"], "t_final": float(t_final), "t_saved": t_saved,
+            "bound": meta.get("bound", {}), "xy": (arrays["x_setup"], arrays["y_setup"])}
+
+
+# ------------------------------------------------------------------------- run
 def summarize(res):
     return {
         "success": bool(res.success), "status": int(res.status), "message": res.message,
@@ -107,51 +272,66 @@ def summarize(res):
     }
 
 
+def _flow_memory(args, model, xy, N):
+    from qsa.commands._memory import flow_bytes, require
+
+    require(args, f"a {model.name} flow at N = {N}", flow_bytes(model, xy, N),
+            "use a smaller --N")
+
+
 def run(args):
     from qsa.flows import solve_flow
+    from qsa.io import save_flow_result
 
     if args.movie:  # refuse a movie that cannot be written before running the flow
         from qsa.plotting import movie_writer
 
         movie_writer(args.movie)
-        if not args.fps > 0:
-            raise ValueError(f"--fps must be positive, got {args.fps:g}")
     snapshots = args.snapshots if args.snapshots is not None else (60 if args.movie else 6)
-    if snapshots < 2:
-        raise ValueError(f"--snapshots must be at least 2, got {snapshots}")
-    xy = initial_curve(args)
-    model = build_model(args, xy)
+    if args.resume:
+        plan = resume_plan(args)
+        model, N, tol, method, t_final = (plan[k] for k in ("model", "N", "tol", "method",
+                                                             "t_final"))
+        xy = plan["xy"]
+        eq = None
+    else:
+        xy, eq = initial_curve(args)
+        model = build_model(args, xy, eq)
+        N, tol, method = (RUN_DEFAULTS[k] if getattr(args, k) is None else getattr(args, k)
+                          for k in ("N", "tol", "method"))
+        t_final = T_FINAL[args.model] if args.t_final is None else args.t_final
+    _flow_memory(args, model, xy, N)
     checkpoint = args.checkpoint
-    if args.out:
-        os.makedirs(args.out, exist_ok=True)
-        if checkpoint is None:
-            checkpoint = os.path.join(args.out, "checkpoint.npz")
-    t_eval = np.linspace(0.0, args.t_final, snapshots)
-    res = solve_flow(model, None if args.resume else xy, args.t_final, N=args.N, tol=args.tol,
-                     method=args.method, t_eval=t_eval, checkpoint=checkpoint,
-                     resume=args.resume, progress=False if args.no_progress else None)
+    if args.out and checkpoint is None:
+        checkpoint = os.path.join(args.out, "checkpoint.npz")
+    t_eval = np.linspace(0.0, t_final, snapshots)
+    res = solve_flow(model, None if args.resume else xy, t_final, N=None if args.resume else N,
+                     tol=tol, method=method, t_eval=t_eval, checkpoint=checkpoint,
+                     resume=args.resume, progress=args.progress)
     summary = summarize(res)
+    written = []
     if args.out:
-        from qsa.io import save_npz
-
-        save_npz(os.path.join(args.out, "result.npz"),
-                 {"t": res.t, "states": res.states, "energy": res.energy,
-                  "length": res.length, "t_steps": res.t_steps,
-                  "energy_steps": res.energy_steps, "length_steps": res.length_steps},
-                 summary)
-        with open(os.path.join(args.out, "summary.json"), "w") as fh:
+        written.append(save_flow_result(os.path.join(args.out, "result.npz"), res, summary))
+        path = os.path.join(args.out, "summary.json")
+        with open(path, "w") as fh:
             json.dump(summary, fh, indent=2)
-    figure = args.plot or (os.path.join(args.out, "flow.png") if args.out else None)
-    if figure:
+        written.append(path)
+    figures = [args.plot] if args.plot else []
+    if args.out and not args.no_plots:
+        figures.append(os.path.join(args.out, "flow.png"))
+    if figures:
         from qsa.plotting import plot_flow, save
 
-        save(plot_flow(res, title=f"{res.system.metadata()['model']}, N = {res.N}"), figure)
-        summary["figure"] = figure
+        fig = plot_flow(res, title=f"{res.system.metadata()['model']}, N = {res.N}")
+        for path in figures:
+            written.append(save(fig, path))
+        summary["figure"] = figures[0]
     if args.movie:
         from qsa.plotting import animate_flow
 
         animate_flow(res, args.movie, fps=args.fps)
         summary["movie"] = args.movie
+    summary["files"] = written
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
@@ -160,8 +340,10 @@ def run(args):
               f"({res.n_rejected} rejected), {res.n_newton} Newton iterations, "
               f"{res.n_lu} factorizations; energy {summary['energy_initial']:.6g}"
               f" -> {summary['energy_final']:.6g}")
-        if args.out:
-            print(f"data and figure written to {args.out}/")
+        if written:
+            print("written: " + ", ".join(written))
         if args.movie:
             print(f"movie ({len(res.t)} frames) written to {args.movie}")
+    if not res.success:
+        note(args, f"the flow stopped early: {res.message}")
     return 0 if res.success else 1

@@ -45,17 +45,25 @@ def __getattr__(name):
 
 
 def add_arguments(p):
-    p.add_argument("--Ns", type=int, nargs="+", default=None,
-                   help="resolutions (default 50 100 200 400 800)")
-    p.add_argument("--tol", type=float, default=None, help="local error tolerance (1e-4)")
-    p.add_argument("--t-final", type=float, default=None,
-                   help="physical time (default 0.2 = the paper's printed 0.1)")
+    from qsa.commands._options import int_at_least, positive_float
+    from qsa.paper.scenarios import ConvergenceScenario
+
+    sc = ConvergenceScenario()
+    p.add_argument("--Ns", type=int_at_least(8), nargs="+", default=None,
+                   help=f"resolutions (default {' '.join(str(n) for n in sc.Ns)})")
+    p.add_argument("--tol", type=positive_float, default=None,
+                   help=f"local error tolerance (default {sc.tol:g})")
+    p.add_argument("--t-final", type=positive_float, default=None,
+                   help=f"physical time (default {sc.t_final:g} = the paper's printed "
+                        f"{sc.t_final / 2:g})")
     p.add_argument("--normal", choices=["centred", "unit", "both"], default="both",
                    help="adhesion-force normal: the paper code's centred difference, the unit "
                         "normal, or both (default)")
-    p.add_argument("--method", choices=["be", "bdf2"], default="be")
+    p.add_argument("--method", choices=["be", "bdf2"], default="be",
+                   help="backward Euler with step doubling (the paper's; default) or BDF2")
     p.add_argument("--json", action="store_true", help="JSON summary on stdout")
-    p.add_argument("--out", default=None, help="folder for positions.npz and the figure")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="folder for positions.npz and the figure")
     p.add_argument("--plot", metavar="FILE", help="write the convergence figure to FILE")
 
 

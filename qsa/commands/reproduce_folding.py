@@ -7,7 +7,7 @@ their separation against l* sqrt(a^2 + 1/2), and the self-intersection
 reports (the paper: a glancing self-intersection at rho = 1.4).
 
 With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
-petals, not the paper's labyrinths and stacked layers; ``--l-star 0.1 --N 600``
+petals, not the paper's labyrinths and stacked layers; ``--kernel-length 0.1 --N 600``
 gives those (``qsa.paper.CHAScenario`` explains why and lists the
 hypotheses tested).
 """
@@ -16,31 +16,41 @@ from __future__ import annotations
 
 import os
 
+from qsa.commands._options import positive_float
 from qsa.commands._simulations import (
     cha_arguments,
     cha_lines,
     cha_scenario,
+    check_resume,
     common_arguments,
     emit,
     progress,
     save_figures,
+    start_note,
 )
 
 HELP = "CHA folding for rho = 1.2, 1.3, 1.4 from identical data (f:fold, Table T1)"
 
 
 def add_arguments(parser):
-    common_arguments(parser, "qsa-folding")
+    from qsa.paper.scenarios import CHAScenario
+
+    common_arguments(parser, "qsa-folding",
+                     f"{CHAScenario().t_final:g}, the paper's last figure time")
     cha_arguments(parser)
-    parser.add_argument("--rho", type=float, nargs="+", default=[1.2, 1.3, 1.4],
+    parser.add_argument("--rho", type=positive_float, nargs="+", default=[1.2, 1.3, 1.4],
                         help="precompression factors (default 1.2 1.3 1.4)")
 
 
 def run(args):
     from qsa.paper import run_folding
-    from qsa.paper.runs import write_output
+    from qsa.paper.runs import cha_run_name, write_output
 
-    folding = run_folding([cha_scenario(args, rho) for rho in args.rho], args.out,
+    scenarios = [cha_scenario(args, rho) for rho in args.rho]
+    check_resume(args, [cha_run_name(sc) for sc in scenarios])
+    start_note(args, f"{len(scenarios)} CHA flows (rho = {', '.join(f'{r:g}' for r in args.rho)})"
+                     f", N = {args.N or scenarios[0].N}")
+    folding = run_folding(scenarios, args.out,
                           t_final=args.t_final, N=args.N, resume=args.resume,
                           progress=progress(args))
     summary = folding.summary()

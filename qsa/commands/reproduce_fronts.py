@@ -16,34 +16,48 @@ Examples
 
 from __future__ import annotations
 
+import glob
 import json
 import os
+
+from qsa.commands._errors import note
+from qsa.commands._options import int_at_least, positive_float
 
 HELP = "front-position ODE vs the DAE faceting flow (positions, collision times)"
 
 
 def add_arguments(parser):
+    import inspect
+
+    from qsa.paper.fronts import compare_fronts
     from qsa.paper.scenarios import SCENARIOS
 
+    defaults = {k: v.default for k, v in inspect.signature(compare_fronts).parameters.items()}
+    sc = SCENARIOS["triangle"]
     parser.add_argument("--scenario", choices=sorted(SCENARIOS), default="triangle",
-                        help="initial splice (default triangle)")
-    parser.add_argument("--alpha", type=float, default=None,
-                        help="front width (default: the scenario's, 0.1)")
-    parser.add_argument("--kstar", type=float, default=None,
-                        help="corner curvature (default: the scenario's, 5)")
-    parser.add_argument("--beta", type=float, default=None,
-                        help="perimeter penalty (default: the scenario's, 5)")
-    parser.add_argument("--N", type=int, default=1200,
-                        help="DAE nodes (default 1200; collision times converge like N^-2)")
-    parser.add_argument("--t-final", type=float, default=None,
-                        help="final time (default: a little after the scenario's collision)")
-    parser.add_argument("--tol", type=float, default=1e-6, help="DAE local error tolerance")
+                        help="initial splice (default %(default)s)")
+    parser.add_argument("--alpha", type=positive_float, default=None,
+                        help=f"front width (default: the scenario's, {sc.alpha:g})")
+    parser.add_argument("--kstar", type=positive_float, default=None,
+                        help=f"corner curvature kappa* (default: the scenario's, {sc.kstar:g})")
+    parser.add_argument("--beta", type=positive_float, default=None,
+                        help=f"length penalty (default: the scenario's, {sc.beta:g})")
+    parser.add_argument("--N", type=int_at_least(50), default=defaults["N"],
+                        help="DAE nodes (default %(default)s; collision times converge like "
+                             "N^-2)")
+    parser.add_argument("--t-final", type=positive_float, default=None,
+                        help="final time (default: the scenario's, a little after its "
+                             "collision)")
+    parser.add_argument("--tol", type=positive_float, default=defaults["tol"],
+                        help="DAE local error tolerance (default %(default)g)")
+    parser.add_argument("--progress", action=_bool_action(), default=None,
+                        help="progress bar of the DAE runs (default: only on a terminal)")
     parser.add_argument("--correction", choices=("none", "newton"), default="none",
                         help="force of the reduction: the splice's (none, default) or one "
                              "Newton step towards the slow manifold (newton; removes most "
                              "of the rate error of a closing facet; ~1.3x the uncorrected "
                              "ODE's CPU time)")
-    parser.add_argument("--dae-check", type=int, metavar="N2", default=None,
+    parser.add_argument("--dae-check", type=int_at_least(50), metavar="N2", default=None,
                         help="also run the DAE at N2 nodes (e.g. N/2) and report how far its "
                              "fronts are from the N run: the reference's own spread")
     parser.add_argument("--eigenvalues", action="store_true",
@@ -54,6 +68,27 @@ def add_arguments(parser):
     parser.add_argument("--plot", metavar="FILE", help="write the front tracks to FILE")
     parser.add_argument("--out", metavar="DIR",
                         help="write fronts_<scenario>.png and .json into DIR")
+
+
+def _bool_action():
+    import argparse
+
+    return argparse.BooleanOptionalAction
+
+
+def numba_kernels_cached() -> bool:
+    """Whether numba has compiled the front-ODE kernels before (its cache files exist)."""
+    try:
+        import numba
+    except ImportError:
+        return True  # the numpy backend: nothing to compile
+    import qsa.reduction as reduction
+
+    folders = [os.path.join(os.path.dirname(reduction.__file__), "__pycache__")]
+    if numba.config.CACHE_DIR:
+        folders.append(numba.config.CACHE_DIR)
+    return any(glob.glob(os.path.join(f, "**", "_kernels.*.nbi"), recursive=True)
+               for f in folders)
 
 
 def _errors_to(block):
@@ -106,12 +141,16 @@ def _report(s):
 def run(args):
     from qsa.paper import compare_eigenvalues, compare_fronts, front_scenario
 
-    if args.N < 50:
-        raise ValueError(f"--N must be at least 50, got {args.N}")
     sc = front_scenario(args.scenario, alpha=args.alpha, kstar=args.kstar, beta=args.beta)
+    runs = f"N = {args.N}" + ("" if args.dae_check is None else f" and N = {args.dae_check}")
+    note(args, f"running the DAE faceting flow ({runs}) to the first collision, then the "
+               "front ODE")
+    if not numba_kernels_cached():
+        note(args, "the first run compiles the front ODE's numba kernels (about 30 s, once; "
+                   "cached for later runs)")
     result = compare_fronts(sc, N=args.N, t_final=args.t_final, tol=args.tol,
                             correction=None if args.correction == "none" else args.correction,
-                            reference_N=args.dae_check)
+                            reference_N=args.dae_check, progress=args.progress)
     summary = result.summary()
     if args.eigenvalues:
         summary["eigenvalues"] = {

@@ -8,38 +8,49 @@ The run is stored as ``cha_rho1.3`` (as in ``qsa reproduce folding``), so
 the two commands share it with the same ``--out`` and ``--resume``.
 
 With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
-petals, not the paper's labyrinths and stacked layers; ``--l-star 0.1 --N 600``
+petals, not the paper's labyrinths and stacked layers; ``--kernel-length 0.1 --N 600``
 gives those (``qsa.paper.CHAScenario`` explains why and lists the
 hypotheses tested).
 """
 
 from __future__ import annotations
 
+from qsa.commands._options import positive_float
 from qsa.commands._simulations import (
     cha_arguments,
     cha_lines,
     cha_scenario,
+    check_resume,
     common_arguments,
     emit,
     progress,
     save_figures,
+    start_note,
 )
 
 HELP = "CHA adhesion flow from the crenellated start, rho=1.3 (f:Snowflake, Table T1)"
 
 
 def add_arguments(parser):
-    common_arguments(parser, "qsa-snowflake")
+    from qsa.paper.scenarios import CHAScenario
+
+    common_arguments(parser, "qsa-snowflake",
+                     f"{CHAScenario().t_final:g}, the paper's last figure time")
     cha_arguments(parser)
-    parser.add_argument("--rho", type=float, default=1.3, help="precompression (default 1.3)")
-    parser.add_argument("--check-resolution", type=float, default=None, metavar="T",
+    parser.add_argument("--rho", type=positive_float, default=CHAScenario().rho,
+                        help="precompression (default %(default)g)")
+    parser.add_argument("--check-resolution", type=positive_float, default=None, metavar="T",
                         help="first run N and 2N to time T and report the difference")
 
 
 def run(args):
     from qsa.paper import resolution_check, run_cha
+    from qsa.paper.runs import cha_run_name
 
     sc = cha_scenario(args, args.rho)
+    check_resume(args, [cha_run_name(sc)])
+    start_note(args, f"CHA flow, rho = {sc.rho:g}, N = {args.N or sc.N}, to t = "
+                     f"{sc.t_final if args.t_final is None else args.t_final:g}")
     summary, lines = {}, []
     if args.check_resolution:
         rc = resolution_check(sc, args.N, args.check_resolution, progress=progress(args))

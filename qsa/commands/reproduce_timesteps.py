@@ -20,7 +20,6 @@ import numpy as np
 HELP = "appendix: time steps for tol 1e-3 ... 1e-6 at N = 100 (paper: 65, 180, 571, 1811)"
 
 
-
 def __getattr__(name):
     """``PAPER``, the appendix's step counts at N = 100: an alias of
     ``qsa.paper.CONVERGENCE.paper_steps`` (loaded on use, so ``qsa --help`` stays quick)."""
@@ -32,22 +31,35 @@ def __getattr__(name):
 
 
 def add_arguments(p):
-    p.add_argument("--tols", type=float, nargs="+", default=None,
-                   help="tolerances (default 1e-3 1e-4 1e-5 1e-6)")
-    p.add_argument("--N", type=int, default=None, help="nodes (default 100)")
-    p.add_argument("--t-final", type=float, default=None, help="physical time (default 0.2)")
+    from qsa.commands._options import int_at_least, positive_float
+    from qsa.paper.scenarios import ConvergenceScenario
+
+    sc = ConvergenceScenario()
+    p.add_argument("--tols", type=positive_float, nargs="+", default=None,
+                   help="tolerances (default "
+                        + " ".join(f"{t:.0e}".replace("e-0", "e-")
+                                   for t in sorted(sc.paper_steps, reverse=True)) + ")")
+    p.add_argument("--N", type=int_at_least(8), default=None,
+                   help=f"nodes (default {sc.N_steps})")
+    p.add_argument("--t-final", type=positive_float, default=None,
+                   help=f"physical time (default {sc.t_final:g})")
     p.add_argument("--normal", choices=["centred", "unit"], default="centred",
                    help="adhesion-force normal (default: the paper code's centred normal)")
     p.add_argument("--no-bdf2", action="store_true", help="skip the BDF2 column")
     p.add_argument("--json", action="store_true", help="JSON summary on stdout")
-    p.add_argument("--out", default=None, help="folder for summary.json and the figure")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="folder for summary.json and the figure")
     p.add_argument("--plot", metavar="FILE", help="write the steps-vs-tol figure to FILE")
 
 
 def run(args):
+    from qsa.commands._errors import note
     from qsa.paper import CONVERGENCE, run_timesteps
 
     paper_steps = CONVERGENCE.paper_steps
+    n_tols = len(args.tols) if args.tols else len(paper_steps)
+    note(args, f"running the appendix example for {n_tols} tolerances with backward Euler"
+               + ("" if args.no_bdf2 else " and BDF2") + " (the smallest takes longest)")
     steps = run_timesteps(CONVERGENCE, args.tols, N=args.N, t_final=args.t_final,
                           force_normal=args.normal, bdf2=not args.no_bdf2)
     tols, be, bdf = steps.tols, steps.be, steps.bdf2

@@ -8,6 +8,7 @@ Examples
 ``qsa spectrum npulse --pulses 3 --alpha 0.2 --json``
 ``qsa spectrum circle --radius 0.7 --alpha 0.1 --N 33 --gauge comoving --plot c.png``
 ``qsa spectrum npulse --pulses 3 --alpha 0.15 --fd --N 2000 --polish --k 10 --sigma 0``
+``qsa spectrum npulse --pulses 3 --alpha 0.2 --save sp.npz``  (``qsa.io.load("sp.npz")``)
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import warnings
 import numpy as np
 
 from qsa.commands import equilibrium
+from qsa.commands._options import finite_float, int_at_least
 
 
 def _extra(q):
@@ -26,28 +28,39 @@ def _extra(q):
     q.add_argument("--gauge", choices=GAUGES, default="normal",
                    help="linearization: normal (J, default), comoving (-M M^+ L_Lambda), "
                         "scaled, paper (-M M^+ grad^2 E as printed)")
-    q.add_argument("--k", type=int, default=None,
+    q.add_argument("--k", type=int_at_least(1), default=None,
                    help="only the k eigenvalues nearest --sigma (sparse shift-invert)")
-    q.add_argument("--sigma", type=float, default=None, help="shift for --k (default 0)")
+    q.add_argument("--sigma", type=finite_float, default=None,
+                   help="shift for --k (default 0)")
     q.add_argument("--no-reject", action="store_true",
                    help="skip the two-resolution spurious-mode check")
-    q.add_argument("--mode", type=int, default=None, metavar="I",
+    q.add_argument("--mode", type=int_at_least(0), default=None, metavar="I",
                    help="with --plot: draw eigenmode I (index in the sorted spectrum) "
                         "instead of the spectrum")
-    q.add_argument("--show", type=int, default=12, help="eigenvalues printed (default 12)")
+    q.add_argument("--show", type=int_at_least(0), default=12,
+                   help="eigenvalues printed (default %(default)s)")
 
 
 def add_parser(sub):
     p = sub.add_parser("spectrum", help="spectrum of the linearization at an equilibrium",
                        description=__doc__.split("\n\n")[0])
-    equilibrium.add_kinds(p, run, extra=_extra)
+    equilibrium.add_kinds(p, run, extra=_extra,
+                          save="write the spectrum and its equilibrium to FILE (.npz; read it "
+                               "back with qsa.io.load, the equilibrium with "
+                               "qsa.io.load_equilibrium; qsa flow ... --init FILE starts from it)")
     return p
 
 
 def run(args):
+    from qsa.commands._memory import require, spectrum_bytes
     from qsa.spectra import NotEquilibriumWarning, UnresolvedEigenvalueWarning, spectrum
 
     eq = equilibrium.build_polished(args)
+    N = eq.curve.N
+    require(args, f"the spectrum at N = {N}" + ("" if args.k is None else f" (k = {args.k})"),
+            spectrum_bytes(N, fourier=not eq.curve.grid.sparse, k=args.k,
+                           reject=not args.no_reject),
+            "use a smaller --N, or --k K (the K eigenvalues nearest --sigma)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotEquilibriumWarning)
         warnings.simplefilter("always", UnresolvedEigenvalueWarning)
@@ -55,6 +68,10 @@ def run(args):
                         reject_spurious=False if args.no_reject else None)
     summary = {"equilibrium": eq.summary(), "spectrum": spec.summary(args.show)}
     summary["warnings"] = [str(w.message) for w in caught]
+    if args.save:
+        from qsa.io import save_spectrum
+
+        summary["file"] = save_spectrum(args.save, spec, eq)
     if args.plot:
         from qsa import plotting
 
@@ -88,4 +105,6 @@ def run(args):
             print(f"  note: {note}")
         if args.plot:
             print(f"  figure written to {args.plot}")
+        if args.save:
+            print(f"  spectrum written to {args.save}")
     return 0 if spec.success else 1

@@ -14,6 +14,9 @@ from __future__ import annotations
 
 import contextlib
 import json
+import socket
+
+from qsa.commands._options import int_at_least
 
 #: Column plotted by ``--plot`` when ``--y`` is not given.
 DEFAULT_Y = {"npulse": "residual", "spectrum": "lambda_0", "circle-spectrum": "max_rel_error",
@@ -38,11 +41,11 @@ def add_parser(sub):
                    help="grid axis: NAME=start:stop:num (linspace) or NAME=v1,v2,... "
                         "(repeat for a product grid); other parameters keep their defaults")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=int_at_least(1), default=None,
                    help="local process pool size (default: CPU count; 1 = in-process)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--dask", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS")
-    g.add_argument("--dask-local", type=int, metavar="N",
+    g.add_argument("--dask-local", type=int_at_least(1), metavar="N",
                    help="run on a local Dask cluster of N worker processes")
     p.add_argument("--on-corrupt", choices=["recompute", "raise"], default="recompute",
                    help="a stored point that cannot be read: recompute it (default) or stop")
@@ -53,8 +56,49 @@ def add_parser(sub):
                    help="y column of --plot (default by study: residual, lambda_0, ...)")
     p.add_argument("--progress", action=argparse_bool(), default=None,
                    help="progress bar (default: on a terminal)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, interrupt_hint=lambda args: f"the points finished are kept in "
+                   f"{args.out}/points; the same command computes the others")
     return p
+
+
+def check_scheduler(address, timeout=5.0):
+    """Refuse at once a ``--dask`` address where no Dask scheduler answers.
+
+    ``tcp://host:port``, ``tls://host:port`` and ``host:port`` are probed: a TCP
+    connection must open and the scheduler's handshake (which it sends as soon as
+    a connection opens) arrive within ``timeout`` seconds. Other schemes are left
+    to Dask.
+
+    Raises
+    ------
+    ValueError
+        Nothing listens there, nothing answers, or the address does not parse.
+    """
+    rest = address
+    for scheme in ("tcp://", "tls://"):
+        if rest.startswith(scheme):
+            rest = rest[len(scheme):]
+            break
+    else:
+        if "://" in rest:
+            return
+    host, sep, port = rest.rpartition(":")
+    if not sep or not port.isdigit():
+        raise ValueError(f"--dask {address}: expected tcp://HOST:PORT (e.g. "
+                         "tcp://127.0.0.1:8786)")
+    try:
+        with socket.create_connection((host.strip("[]") or "127.0.0.1", int(port)),
+                                      timeout=timeout) as conn:
+            conn.settimeout(timeout)
+            answered = bool(conn.recv(1))
+        reason = "it closed the connection without a handshake"
+    except TimeoutError:
+        answered, reason = False, f"no answer within {timeout:g} s"
+    except OSError as exc:
+        answered, reason = False, exc.strerror or str(exc)
+    if not answered:
+        raise ValueError(f"--dask {address}: no Dask scheduler there ({reason}); start one "
+                         "with `dask scheduler`, or use --dask-local N")
 
 
 def argparse_bool():
@@ -72,12 +116,18 @@ def run(args):
     grid = ParameterGrid.parse(args.param)
     study = STUDIES[args.study]
     if args.dask is not None:
+        check_scheduler(args.dask)
         ctx = dask_executor(address=args.dask)
     elif args.dask_local is not None:
         ctx = dask_executor(n_workers=args.dask_local)
     else:
         ctx = contextlib.nullcontext(None)
-    with ctx as executor:
+    with contextlib.ExitStack() as stack:
+        try:
+            executor = stack.enter_context(ctx)
+        except (OSError, TimeoutError) as exc:
+            where = args.dask or f"a local cluster of {args.dask_local} workers"
+            raise ValueError(f"--dask: cannot use {where} ({exc})") from None
         res = run_sweep(study, grid, args.out, executor=executor, workers=args.workers,
                         progress=args.progress, on_corrupt=args.on_corrupt)
     summary = res.summary()

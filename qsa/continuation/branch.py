@@ -256,11 +256,14 @@ class Branch:
     success : bool
         Whether the requested range was covered (``status >= 0``).
     status : int
-        A key of :data:`MESSAGES`: 0 range covered, -1 step size below ``ds_min``
-        (corrector failures), -2 ``max_steps`` reached, -3 natural continuation
-        stopped (fold or failure), -4 singular tangent system.
+        A key of :data:`MESSAGES`: 0 range covered, 1 stopped at self-contact of the
+        curve, 2 stopped at a fold it cannot pass (step size below ``ds_min`` where
+        ``|dp/ds|`` is small), -1 step size below ``ds_min`` elsewhere (corrector
+        failures), -2 ``max_steps`` reached, -3 natural continuation stopped (fold or
+        failure), -4 singular tangent system, -5 numerical failure (an exception of a
+        solver, its text in the message).
     message : str
-        Starts with ``MESSAGES[status]``; then where it stopped, folds and sign changes.
+        Starts with ``MESSAGES[status]``; then where it stopped, folds and bifurcations.
     n_steps, n_rejected : int
         Accepted continuation steps and rejected (corrector-failed) attempts.
     n_newton : int
@@ -271,7 +274,10 @@ class Branch:
     symmetry : BlochSymmetry or None
         The symmetry kept along the branch (the sectors of ``sector_unstable``).
     n_eigensolves : int
-        Shift-invert eigen-solves (one factorization each) spent on stability.
+        Shift-invert eigen-solves (one factorization each) spent on stability: one per
+        point for the count, plus :attr:`n_locate_solves`.
+    n_locate_solves : int
+        Those spent locating the crossings (one per trial point).
     energy_factory : callable
         The family ``p -> Energy`` of the branch.
     constraints : tuple
@@ -309,6 +315,7 @@ class Branch:
     bifurcations: tuple = ()
     symmetry: object = None
     n_eigensolves: int = 0
+    n_locate_solves: int = 0
     energy_factory: object = field(default=None, repr=False)
     constraints: tuple = ()
     origin: object = field(default=None, repr=False)
@@ -367,4 +374,5 @@ class Branch:
             [int(n) for n in self.n_unstable],
             "bifurcations": [b.summary() for b in self.bifurcations],
             "n_eigensolves": int(self.n_eigensolves),
+            "n_locate_solves": int(self.n_locate_solves),
         }

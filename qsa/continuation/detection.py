@@ -33,15 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from qsa.continuation.branch import CriticalMode
-from qsa.spectra.symmetry import (
-    DENSE_SECTOR_LIMIT,
-    BlochSymmetry,
-    detect_symmetry,
-    sector_spectrum,
-)
+from qsa.spectra.symmetry import DENSE_SECTOR_LIMIT, BlochSymmetry, sector_spectrum
 
 __all__ = ["StabilityRecord", "count_unstable", "keeps_symmetry", "locate_crossing",
-           "critical_modes", "crossing_index", "switching_directions", "branch_symmetry"]
+           "critical_modes", "crossing_index", "switching_directions"]
 
 #: Eigenvalues per sector stored at each point (nearest 0).
 N_CRITICAL = 3
@@ -86,7 +81,7 @@ def keeps_symmetry(curve, symmetry: BlochSymmetry, tol=1e-7) -> bool:
     return bool(np.max(np.abs(np.roll(k, -symmetry.shift) - k)) <= tol * scale)
 
 
-def count_unstable(energy, curve, symmetry: BlochSymmetry, k=None, spectrum_fn=None):
+def count_unstable(energy, curve, symmetry: BlochSymmetry, k=None, constraints=None):
     """``(StabilityRecord, SectorSpectrum)`` at an equilibrium (one factorization).
 
     Parameters
@@ -96,17 +91,15 @@ def count_unstable(energy, curve, symmetry: BlochSymmetry, k=None, spectrum_fn=N
     symmetry : BlochSymmetry
     k : int, optional
         Eigenvalues per sector for sectors too large for the dense path.
-    spectrum_fn : callable, optional
-        ``(energy, curve, symmetry, k, sectors) -> SectorSpectrum`` (default
-        :func:`~qsa.spectra.symmetry.sector_spectrum`; the constrained spectra plug in here).
+    constraints : sequence of Constraint, optional
+        Length / area constraints (the constrained operator's spectrum).
 
     Returns
     -------
     StabilityRecord, SectorSpectrum
     """
-    fn = spectrum_fn or _default_spectrum
     kk = None if symmetry.shift <= DENSE_SECTOR_LIMIT else (k or 8)
-    spec = fn(energy, curve, symmetry, kk, None)
+    spec = sector_spectrum(energy, curve, symmetry, k=kk, constraints=constraints)
     counts = tuple(spec.n_unstable_in(b) for b in symmetry.sectors)
     rows = []
     for b in symmetry.sectors:
@@ -116,10 +109,6 @@ def count_unstable(energy, curve, symmetry: BlochSymmetry, k=None, spectrum_fn=N
     rec = StabilityRecord(int(sum(counts)), counts, np.array(rows).reshape(-1, 2),
                           bool(spec.complete), int(np.sum(spec.ambiguous)))
     return rec, spec
-
-
-def _default_spectrum(energy, curve, symmetry, k, sectors):
-    return sector_spectrum(energy, curve, symmetry, k=k, sectors=sectors)
 
 
 def crossing_index(spec, b, j):
@@ -271,8 +260,3 @@ def switching_directions(bif, symmetry: BlochSymmetry, tol=1e-6):
             kept.append(v)
     w = bif.curve.dsigma
     return [v / np.sqrt(np.sum(w * v * v)) for v in kept]
-
-
-def branch_symmetry(curve, tol=1e-8) -> BlochSymmetry:
-    """The symmetry a branch starting at ``curve`` keeps (see :func:`detect_symmetry`)."""
-    return detect_symmetry(curve, tol)

@@ -24,7 +24,7 @@ import os
 import numpy as np
 
 from qsa.continuation.branch import Branch
-from qsa.io import json_default, save_npz
+from qsa.npz import json_default, save_npz
 
 __all__ = ["save_branch", "save_branches"]
 

@@ -15,6 +15,11 @@ eigenvalue of a circle (O(2)) all directions of the critical plane are rotations
 so one branch; of a D_n-symmetric state (an ``n``-pulse) the fixed lines of the
 reflections (isotropy directions), one per group orbit; at a simple eigenvalue ``phi``
 and ``-phi`` unless a symmetry maps one to the other.
+
+The new branch keeps the symmetry of its first point when the grid holds it (a node
+shift by ``N/m``: ``m`` must divide ``N``, so odd orders on Fourier grids): its states
+are kept in that fixed-point space, which prevents jumping to other branches near its
+own bifurcations, and its spectra split into Bloch sectors.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from qsa._checks import real_number
+from qsa.constraints import bind_constraints
 from qsa.continuation.branch import Bifurcation, Branch
 from qsa.continuation.detection import switching_directions
 from qsa.continuation.steps import Problem, corrector, parse_span
@@ -120,7 +126,8 @@ def switch_branch(branch: Branch, bifurcation: Bifurcation, span=None, *, constr
         raise ValueError(f"bifurcation is a {bifurcation.kind} without critical modes: no "
                          "branch to switch to (pick one with kind == 'branch')")
     factory = branch.energy_factory
-    cons = branch.constraints if constraints is None else tuple(constraints)
+    cons = (branch.constraints if constraints is None
+            else bind_constraints(constraints, bifurcation.curve))
     if span is None:
         span = (float(np.min(branch.values)), float(np.max(branch.values)))
     span = tuple(float(v) for v in span)
@@ -161,12 +168,12 @@ def _follow(factory, cons, c_star, p_star, phi, eps, vals, step, param, bif, opt
     d[prob.N] = dL
     d /= np.sqrt(np.sum(prob.weight(n) * d * d))
     y1, ok, _ = corrector(prob, y_star + eps * d, d, opts["tol"], opts["maxiter"] + 10)
-    stab = _Stability(opts["stability"], sym)
+    stab = _Stability(opts["stability"], sym, cons or None)
     if not ok:
         return Branch(param, (), (), (), "pseudo-arclength", False, -1,
                       f"the first point of the new branch (at distance {eps:.3g} from "
                       f"{param}={p_star:.10g}) did not converge: try another amplitude",
-                      0, 1, 0, (), sym, 0, factory, tuple(cons or ()), bif)
+                      0, 1, 0, (), sym, 0, 0, factory, tuple(cons or ()), bif)
     prev = y1 - y_star
     prev /= np.sqrt(np.sum(prob.weight(n) * prev * prev))
     prob = prob.rebased(prob.system.curve(y1[:n]), float(y1[-1]))
@@ -175,7 +182,12 @@ def _follow(factory, cons, c_star, p_star, phi, eps, vals, step, param, bif, opt
              locate=opts["locate"], contact=opts["contact"])
     br = _arclength(factory, prob, x1, vals, step, param, opts["max_steps"], opts["ds_max"],
                     opts["ds_min"], stab, True, o, p0=float(y1[-1]), prev=prev)
+    note = f"; switched at {param}={p_star:.10g}"
+    m = bif.sector
+    if bif.symmetry is not None and bif.symmetry.circle and m > 1 and c_star.N % m:
+        note += (f"; N = {c_star.N} is not a multiple of {m}: the branch is followed without "
+                 f"its {m}-fold symmetry")
     return Branch(br.param, br.points, br.folds, br.branch_points, br.method, br.success,
-                  br.status, br.message + f"; switched at {param}={p_star:.10g}", br.n_steps,
+                  br.status, br.message + note, br.n_steps,
                   br.n_rejected, br.n_newton, br.bifurcations, br.symmetry, br.n_eigensolves,
-                  factory, tuple(cons or ()), bif)
+                  br.n_locate_solves, factory, tuple(cons or ()), bif)

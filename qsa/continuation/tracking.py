@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from qsa._checks import integer, real_number
+from qsa.constraints import bind_constraints
 from qsa.continuation.branch import MESSAGES, Bifurcation, Branch, Fold
 from qsa.continuation.detection import (
     count_unstable,
@@ -49,26 +50,35 @@ from qsa.continuation.steps import (
     tangent,
 )
 from qsa.curve import Curve
+from qsa.discretize import Fourier
 from qsa.equilibria.newton import newton_solve
 from qsa.equilibria.system import equal_arclength
 from qsa.linalg import factorize
-from qsa.spectra.symmetry import BlochSymmetry, detect_symmetry, sector_spectrum
+from qsa.spectra.symmetry import (
+    DENSE_SECTOR_LIMIT,
+    BlochSymmetry,
+    detect_symmetry,
+    sector_spectrum,
+)
 
-__all__ = ["continuation"]
+__all__ = ["continuation", "touches_itself"]
 
 
 class _Stability:
     """Stability of the points of one branch: sector counts (or a user callable)."""
 
-    def __init__(self, stability, symmetry: BlochSymmetry, k=None):
+    def __init__(self, stability, symmetry: BlochSymmetry, constraints=None, k=None):
         if not (stability is None or isinstance(stability, bool) or callable(stability)):
             raise ValueError(f"stability must be a bool or a callable (energy, curve) -> int, "
                              f"got {stability!r}")
         self.hook = stability if callable(stability) else None
         self.on = bool(stability)
         self.symmetry = symmetry
+        self.constraints = constraints
         self.k = k
         self.n_solves = 0
+        self.n_locate = 0
+        self.unlocated = []  # intervals with a count change that was not located
         self.values = []  # per point: {b: eigenvalues of sector b, decreasing}, or None
         self.incomplete = False
 
@@ -83,7 +93,7 @@ class _Stability:
         if not keeps_symmetry(curve, sym):
             # the branch broke its symmetry numerically: count without sectors
             sym = BlochSymmetry(1, curve.N)
-        rec, spec = count_unstable(energy, curve, sym, self.k)
+        rec, spec = count_unstable(energy, curve, sym, self.k, self.constraints)
         self.n_solves += 1
         self.incomplete |= not rec.complete
         self.values.append((sym, {b: np.sort(spec.eigenvalues[spec.sector == b])[::-1]
@@ -92,9 +102,11 @@ class _Stability:
 
     def eigenvalue(self, eq, sym, b, j):
         """The ``j``-th largest eigenvalue of sector ``b`` at ``eq``: ``(lambda, error, spec)``."""
-        kk = None if self.k is None or sym.shift <= 400 else self.k
-        spec = sector_spectrum(eq.energy, eq.curve, sym, k=kk, sectors=[b])
+        kk = None if sym.shift <= DENSE_SECTOR_LIMIT else (self.k or 8)
+        spec = sector_spectrum(eq.energy, eq.curve, sym, k=kk, sectors=[b],
+                               constraints=self.constraints)
         self.n_solves += 1
+        self.n_locate += 1
         i = crossing_index(spec, b, j)
         if i is None:
             return None
@@ -187,7 +199,8 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     vals, step = parse_span(values)
     p0 = float(vals[0])
     guess = equal_arclength(curve)
-    prob = Problem(energy_factory, guess, p0, constraints)
+    cons = bind_constraints(constraints, guess) or None
+    prob = Problem(energy_factory, guess, p0, cons)
     run = newton_solve(prob.system, prob.system.pack(guess), tol, max(maxiter, 30),
                        energy=energy_factory(p0))
     if not run.success:
@@ -202,7 +215,7 @@ def continuation(energy_factory, curve: Curve, param: str, values, method="pseud
     if sym.order > 1:  # re-polish in the fixed-point space
         again = newton_solve(prob.system, x0, tol, max(maxiter, 30), energy=energy_factory(p0))
         x0 = prob.project(np.append(again.x, p0))[:-1] if again.success else run.x
-    stab = _Stability(stability, sym)
+    stab = _Stability(stability, sym, cons)
     opts = dict(tol=tol, maxiter=maxiter, ptol=ptol, locate=locate, contact=stop_at_contact)
     if method == "natural":
         return _natural(energy_factory, prob, x0, vals, param, stab, opts)
@@ -230,24 +243,24 @@ def _natural(factory, prob, x, vals, param, stab, opts):
                 frac = (p - vals[k - 1]) / (vals[k - 1] - vals[k - 2])
                 pred[: prob.N + 1] += frac * (states[-1][: prob.N + 1]
                                               - states[-2][: prob.N + 1])
-            run = newton_solve(prob.system, prob.project(pred), tol, maxiter, energy=factory(p))
-            if not run.success:
+            e_p = np.zeros(pred.size + 1)
+            e_p[-1] = 1.0  # the corrector's hyperplane p = const: Newton at fixed p
+            y, ok, its = corrector(prob, np.append(pred, p), e_p, tol, maxiter)
+            if not ok:
                 n_rej += 1
                 status = -3
-                msg = (f"{MESSAGES[-3]}: at {param}={p:.8g} (relative residual "
-                       f"{run.history.min():.2e}); the fold lies between {vals[k - 1]:.8g} "
-                       f"and {p:.8g}")
+                msg = (f"{MESSAGES[-3]}: at {param}={p:.8g} (no convergence in {maxiter} "
+                       f"Newton steps); the fold lies between {vals[k - 1]:.8g} and {p:.8g}")
                 break
-            n_newton += run.n_newton
-            y = np.append(run.x, p)
-            c = prob.system.curve(run.x)
-            if opts["contact"] and c.self_intersects():
+            n_newton += its
+            c = prob.system.curve(y[:-1])
+            if opts["contact"] and touches_itself(c):
                 status = 1
                 msg = f"{MESSAGES[1]}: between {param}={vals[k - 1]:.8g} and {p:.8g}"
                 break
-            det = factorize(prob.system.jacobian(run.x, factory(p))).det_sign()
-            points.append(make_point(prob, y, np.nan, det, stab.record(factory(p), c),
-                                     run.status, run.history, run.n_newton, run.n_lu))
+            det = factorize(prob.system.jacobian(y[:-1], factory(p))).det_sign()
+            points.append(make_point(prob, y, np.nan, det, stab.record(factory(p), c), 0, (),
+                                     its, its))
             states.append(y)
             probs.append(prob)
     except SOLVER_ERRORS as exc:
@@ -259,12 +272,12 @@ def _natural(factory, prob, x, vals, param, stab, opts):
 
         def f(p):
             frac = (p - ya[-1]) / (yb[-1] - ya[-1])
-            guess = ya[:-1] + frac * (yb[:-1] - ya[:-1])
-            r = newton_solve(probs[i + 1].system, probs[i + 1].project(guess), tol,
-                             maxiter + 10, energy=factory(p))
-            if not r.success:
+            guess = ya + frac * (yb - ya)
+            e_p = np.zeros(guess.size)
+            e_p[-1] = 1.0
+            yy, ok, _ = corrector(probs[i + 1], guess, e_p, tol, maxiter + 10)
+            if not ok:
                 return None
-            yy = probs[i + 1].project(np.append(r.x, p))
             return equilibrium(probs[i + 1], yy), p, yy
         return f, ya[-1], yb[-1]
 
@@ -277,7 +290,7 @@ def _natural(factory, prob, x, vals, param, stab, opts):
                 "point)")
     return Branch(param, tuple(points), (), bps, "natural", status >= 0, status, msg,
                   len(points) - 1, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves,
-                  factory, tuple(prob.constraints or ()))
+                  stab.n_locate, factory, tuple(prob.constraints or ()))
 
 
 # ------------------------------------------------------------------ pseudo-arclength
@@ -313,8 +326,8 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
                     break
                 continue
             cnew = prob.system.curve(y_new[:n])
-            if opts["contact"] and cnew.self_intersects():
-                y_c, its_c = _last_before_contact(prob, y, t, ds, tol, maxiter)
+            if opts["contact"] and touches_itself(cnew):
+                y_c, its_c, p_in = _last_before_contact(prob, y, t, ds, tol, maxiter)
                 if y_c is not None:
                     prob = prob.rebased(prob.system.curve(y_c[:n]), float(y_c[-1]))
                     y_c = np.concatenate([prob.system.pack(prob.system.curve(y_c[:n])),
@@ -329,8 +342,9 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
                     states.append(y_c)
                     steps += 1
                 status = 1
+                p_in = y_new[-1] if not np.isfinite(p_in) else p_in
                 msg = (f"{MESSAGES[1]}: the curve touches itself between {param}="
-                       f"{points[-1].param:.8g} and {y_new[-1]:.8g}")
+                       f"{points[-1].param:.10g} and {p_in:.10g}")
                 break
             steps += 1
             prob = prob.rebased(cnew, float(y_new[-1]))
@@ -392,25 +406,43 @@ def _arclength(factory, prob, x, vals, step, param, max_steps, ds_max, ds_min, s
         msg += f"; det F_x changes sign without a fold after point(s) {list(bps)}"
     return Branch(param, tuple(points), tuple(folds), bps, "pseudo-arclength", status >= 0,
                   status, msg, steps, n_rej, n_newton, bifs, stab.symmetry, stab.n_solves,
-                  factory, tuple(prob.constraints or ()))
+                  stab.n_locate, factory, tuple(prob.constraints or ()))
 
 
-def _last_before_contact(prob, y, t, ds, tol, maxiter, bisections=8):
-    """Bisection of the step ``ds`` for the last state without self-contact."""
+def touches_itself(curve: Curve, refine=4) -> bool:
+    """Whether the curve crosses or touches itself (its polygon, on a finer grid for Fourier).
+
+    On a Fourier grid the curve is resampled to about ``refine`` times the nodes first, so
+    that the chords of the polygon follow the smooth curve closely (their distance to it
+    is ``h^2 kappa / 8``).
+    """
+    if isinstance(curve.grid, Fourier) and refine > 1:
+        curve = curve.on_grid(Fourier(refine * curve.N + (refine * curve.N + 1) % 2))
+    return curve.self_intersects()
+
+
+def _last_before_contact(prob, y, t, ds, tol, maxiter, rtol=1e-9, max_bisections=40):
+    """Bisection of the step ``ds`` for the last state without self-contact.
+
+    Returns ``(y_last, iterations, p_contact)``: the last contact-free state found, its
+    corrector iterations, and the parameter of the first state found in contact.
+    """
     n = y.size - 1
     a, b = 0.0, ds
-    best, best_its = None, 0
-    for _ in range(bisections):
+    best, best_its, p_in = None, 0, np.nan
+    for _ in range(max_bisections):
+        if b - a <= rtol * ds:
+            break
         m = 0.5 * (a + b)
         ym, ok, its = corrector(prob, y + m * t, t, tol, maxiter)
         if not ok:
             b = m
             continue
-        if prob.system.curve(ym[:n]).self_intersects():
-            b = m
+        if touches_itself(prob.system.curve(ym[:n])):
+            b, p_in = m, float(ym[-1])
         else:
             a, best, best_its = m, ym, its
-    return best, best_its
+    return best, best_its, p_in
 
 
 def _locate_fold(prob, ya, pa, pb, ta, index, tol, maxiter, refine):
@@ -467,7 +499,10 @@ def _bifurcations(points, stab, solve_at, folds, opts, natural, probs=None, tang
                 bif = _one_crossing(points, stab, solve_at, i, sym, b, j, mult,
                                     1 if eb > ea else -1, fold_at, opts, natural, probs,
                                     tangents)
-                if bif is not None:
+                if bif is None:
+                    if opts["locate"]:
+                        stab.unlocated.append(i)
+                else:
                     out.append(bif)
                     if bif[1].kind == "fold":
                         located_folds.add(i)
@@ -479,7 +514,33 @@ def _bifurcations(points, stab, solve_at, folds, opts, natural, probs=None, tang
             out.append((pos, Bifurcation(f.param, 1, "fold", (), f.index, equilibrium(prob, y),
                                          np.nan, 0, None, stab.symmetry)))
     out.sort(key=lambda x: (x[1].index, x[0]))
-    return tuple(b for _, b in out)
+    return _merge_coincident(tuple(b for _, b in out), points, opts["ptol"])
+
+
+def _merge_coincident(bifs, points, ptol, rtol=1e-5):
+    """One bifurcation for crossings of the same sector at the same parameter.
+
+    Without a grid symmetry (e.g. an n-pulse on a grid whose size n does not divide) a
+    symmetric double eigenvalue is two eigenvalues of one sector crossing together: they
+    are located separately, at the same parameter within the location tolerance, and
+    reported as one bifurcation of multiplicity 2. Coincident means within ``rtol`` of
+    the step between the bracketing points (the pair splits by the round-off the
+    equations without the symmetry let grow along the critical modes).
+    """
+    out = []
+    for b in bifs:
+        prev = out[-1] if out else None
+        step = abs(points[b.index + 1].param - points[b.index].param)
+        if (prev is not None and prev.kind == b.kind == "branch" and prev.index == b.index
+                and prev.sector == b.sector and np.sign(prev.change) == np.sign(b.change)
+                and abs(prev.parameter - b.parameter) <= max(100 * ptol, rtol * step)):
+            out[-1] = Bifurcation(prev.parameter, prev.multiplicity + b.multiplicity, "branch",
+                                  prev.modes + b.modes, prev.index, prev.equilibrium,
+                                  prev.eigenvalue, prev.change + b.change, prev.tangent,
+                                  prev.symmetry)
+        else:
+            out.append(b)
+    return tuple(out)
 
 
 def _one_crossing(points, stab, solve_at, i, sym, b, j, mult, sign, fold_at, opts, natural,
@@ -487,11 +548,20 @@ def _one_crossing(points, stab, solve_at, i, sym, b, j, mult, sign, fold_at, opt
     fa = stab.values[i][1][b][j]
     fb = stab.values[i + 1][1][b][j]
     kind = "fold" if (i in fold_at and b == 0) else "branch"
-    if not opts["locate"] or not fa * fb < 0:
+    if not opts["locate"] or (fa == 0 and fb == 0):
         return None
+    if not fa * fb < 0:
+        # an end is zero within its error (not counted as unstable): the crossing is there
+        if abs(fa) <= abs(fb):
+            fa = -np.sign(fb) * max(abs(fa), 1e-300)
+        else:
+            fb = -np.sign(fa) * max(abs(fb), 1e-300)
     f, t0, t1 = solve_at(i)
-    best = locate_crossing(f, lambda eq: stab.eigenvalue(eq, sym, b, j), t0, t1, fa, fb,
-                           opts["ptol"])
+    try:
+        best = locate_crossing(f, lambda eq: stab.eigenvalue(eq, sym, b, j), t0, t1, fa, fb,
+                               opts["ptol"])
+    except SOLVER_ERRORS:
+        best = None
     if best is None:
         return None
     pos, eq, p, lam, spec_i, yy = best
@@ -520,6 +590,9 @@ def _describe(param, folds, bifs, stab):
         msg += "; branch points at " + ", ".join(
             f"{param}={b.parameter:.10g} ({lab[b.modes[0].label]} {b.sector}"
             f"{', double' if b.multiplicity == 2 else ''})" for b in br)
+    if stab.unlocated:
+        msg += ("; the unstable count changes without a located crossing after point(s) "
+                f"{sorted(set(stab.unlocated))} (see BranchPoint.sector_unstable)")
     if stab.incomplete:
         msg += ("; the unstable counts are of the eigenvalues nearest 0 per sector (sectors "
                 "too large for the complete count)")

@@ -52,6 +52,7 @@ from scipy.spatial import cKDTree
 
 from qsa._checks import real_number
 from qsa.energies.adhesion_hessian import AdhesionDerivatives, adhesion_derivatives
+from qsa.energies.adhesion_velocity import VelocityJacobian, adhesion_velocity_jacobian
 from qsa.energies.base import Energy
 
 __all__ = [
@@ -921,3 +922,22 @@ class Adhesion(Energy):
         ndarray, shape like ``v``
         """
         return self.derivatives(c).hessian_vector(v)
+
+    def normal_velocity_jacobian(self, c) -> VelocityJacobian:
+        """The exact derivative of :meth:`normal_velocity` with respect to ``U = (kappa, g)``.
+
+        Base point and angle fixed, pairs held fixed (:mod:`qsa.energies.adhesion_velocity`).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        VelocityJacobian
+            ``J @ U1`` (O(N + pairs)), ``J.dense()`` (N, 2N), and the sparse parts
+            ``VU``, ``VY`` for a Newton matrix with the positions as extra unknowns.
+        """
+        x, y = c.positions()
+        return adhesion_velocity_jacobian(self.kernel, c,
+                                          adhesion_pairs(self.kernel, x, y, method=self.method))

@@ -114,10 +114,61 @@ from qsa.curve import Curve
 from qsa.discretize import cumulative_factors
 from qsa.linalg import ReducedHessian
 
-__all__ = ["AdhesionDerivatives", "adhesion_derivatives", "cumulative_factors", "HESSIAN_FORMS"]
+__all__ = ["AdhesionDerivatives", "adhesion_derivatives", "cumulative_factors",
+           "position_state_equations", "HESSIAN_FORMS"]
 
 #: The assembled forms of :meth:`AdhesionDerivatives.hessian`.
 HESSIAN_FORMS = ("auto", "dense", "reduced")
+
+
+def position_state_equations(c: Curve):
+    """Jacobians ``(cY, cU)`` of the equations of the state ``Y = (theta, x, y)``.
+
+    On finite-difference grids ``theta = theta0 + C(g kappa)``, ``x = x0 + C(g cos theta)``,
+    ``y = y0 + C(g sin theta)`` with ``C = Bd^{-1} R`` (:func:`~qsa.discretize.cumulative_factors`)
+    are the sparse lower-triangular equations ``c(Y, U) = 0``
+
+        Bd theta - R(g kappa) = theta0 e_0,   Bd x - R(g cos theta) = x0 e_0,
+        Bd y - R(g sin theta) = y0 e_0,
+
+    so a change ``U1`` of ``U = (kappa, g)`` moves the state by ``Y1`` with
+    ``cY Y1 + cU U1 = 0``.
+
+    Parameters
+    ----------
+    c : Curve
+        On a finite-difference grid.
+
+    Returns
+    -------
+    cY : scipy.sparse matrix, shape (3N, 3N)
+        Lower triangular.
+    cU : scipy.sparse matrix, shape (3N, 2N)
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse.linalg as spla
+    >>> from qsa import Curve, FiniteDifference
+    >>> c = Curve.polar(lambda t: 1 + 0.2 * np.cos(3 * t), FiniteDifference(32))
+    >>> cY, cU = position_state_equations(c)
+    >>> U1 = np.cos(np.arange(64.0))
+    >>> Y1 = spla.spsolve(cY.tocsc(), -(cU @ U1))
+    >>> h = 1e-6
+    >>> dX = (c.with_U(c.U + h * U1).positions() - c.with_U(c.U - h * U1).positions()) / (2 * h)
+    >>> bool(np.allclose(Y1[32:], dX.ravel(), atol=1e-8))
+    True
+    """
+    N = c.N
+    g, kappa = c.g, c.kappa
+    th = c.theta()
+    cs, sn = np.cos(th), np.sin(th)
+    d = sp.diags
+    O = sp.csr_matrix((N, N))
+    Bd, R = cumulative_factors(N)
+    cY = sp.bmat([[Bd, None, None], [R @ d(g * sn), Bd, None], [R @ d(-g * cs), None, Bd]],
+                 format="csr")
+    cU = sp.bmat([[R @ d(-g), R @ d(-kappa)], [O, R @ d(-cs)], [O, R @ d(-sn)]], format="csr")
+    return cY, cU
 
 
 class _Entries:
@@ -443,13 +494,9 @@ class AdhesionDerivatives:
             raise ValueError("form='reduced' needs a finite-difference grid (on Fourier grids "
                              "the cumulative integral is dense); use form='dense'")
         N = c.N
-        g, kappa, om = c.g, c.kappa, c.grid.weights
-        th = c.theta()
-        cs, sn = np.cos(th), np.sin(th)
+        g, om = c.g, c.grid.weights
         XX, XW, WW = self._pair_blocks()
         d = sp.diags
-        O = sp.csr_matrix((N, N))
-        Bd, R = cumulative_factors(N)
         n = np.arange(N, dtype=np.int32)
         # L_UU = [[0, beta], [beta, omega K_ww omega]], on (kappa, g)
         Luu = _Entries()
@@ -466,8 +513,7 @@ class AdhesionDerivatives:
         Lyy.add(n, n, -g * self.a)
         r, cc, v = XX.arrays()
         Lyy.add(N + r, N + cc, v)
-        cY = sp.bmat([[Bd, None, None], [R @ d(g * sn), Bd, None], [R @ d(-g * cs), None, Bd]])
-        cU = sp.bmat([[R @ d(-g), R @ d(-kappa)], [O, R @ d(-cs)], [O, R @ d(-sn)]])
+        cY, cU = position_state_equations(c)
         Luu, Lyu, Lyy = (e.tocsr(shape) for e, shape in (
             (Luu, (2 * N, 2 * N)), (Lyu, (3 * N, 2 * N)), (Lyy, (3 * N, 3 * N))))
         ds = c.dsigma

@@ -28,8 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from qsa._checks import real_number
-from qsa.constraints import area_gradient, area_hessian
 from qsa.energies.base import Energy
+from qsa.measures import area_gradient, area_hessian
 
 __all__ = ["AreaEnergy", "Pressure", "AreaPenalty"]
 

@@ -58,6 +58,8 @@ def add_matrices(a, b):
     'ndarray'
     >>> sp.issparse(add_matrices(sp.identity(2), sp.identity(2)))
     True
+    >>> type(add_matrices(np.eye(2), sp.identity(2))).__name__
+    'ndarray'
     """
     if isinstance(b, ReducedHessian) and not isinstance(a, ReducedHessian):
         return b + a
@@ -67,6 +69,8 @@ def add_matrices(a, b):
         return b + a
     if sp.issparse(a) and isinstance(b, np.ndarray):
         return b + a.toarray()
+    if isinstance(a, np.ndarray) and sp.issparse(b):  # ndarray + sparse would be np.matrix
+        return a + b.toarray()
     return a + b
 
 

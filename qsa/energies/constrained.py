@@ -14,7 +14,8 @@ spectra and the continuation alike:
     constraints (:mod:`qsa.constraints`) also their multipliers ``mu_c`` in
     ``nabla_I E = Lambda . Psi + sum_c mu_c nabla_I c``.
 ``residual_scale(energy, curve)``
-    The largest single term of ``V^n``; ``max|V^n| / residual_scale`` is the
+    The largest single term of ``V^n`` (or, where the terms vanish, their change under
+    a small relative change of the state); ``max|V^n| / residual_scale`` is the
     relative residual every solver reports.
 ``residual_floor(energy, curve)``
     The round-off level of ``max|V^n|`` at this curve: no equilibrium of the discrete
@@ -62,6 +63,26 @@ def normal_velocity(energy, curve: Curve) -> np.ndarray:
     return energy.normal_velocity(curve)
 
 
+#: Relative change of ``kappa`` and ``g`` whose effect on the terms of ``V^n`` bounds
+#: :func:`residual_scale` from below.
+SCALE_CHANGE = 1e-3
+
+
+def _velocity_terms(energy, curve: Curve) -> list:
+    """The terms of ``V^n`` of every gradient part (arrays) and the energies' own scales."""
+    N = curve.N
+    out = []
+    for term in energy.terms():
+        own = getattr(term, "velocity_scale", None)
+        if own is not None:  # an energy with its own exact V^n (e.g. a pressure)
+            out.append(np.array([float(own(curve))]))
+            continue
+        for grad in term.gradient_parts(curve):
+            mu, xi = grad[:N], curve.g * grad[N:]
+            out += [apply_laplace_s(curve, mu), curve.kappa**2 * mu, curve.kappa * xi]
+    return out
+
+
 def residual_scale(energy, curve: Curve) -> float:
     """Largest single term of ``V^n = Delta_s mu + kappa^2 mu - kappa xi``, split by density.
 
@@ -73,6 +94,16 @@ def residual_scale(energy, curve: Curve) -> float:
     ``velocity_scale(curve)`` method (the area energies, whose ``V^n`` is a constant)
     contributes that instead.
 
+    Where the terms vanish themselves, not only their sum, they cannot measure a
+    residual: at a circle whose curvature sits at a zero of the well (``kappa = kstar``,
+    ``W = W' = 0``: the critical circle of :class:`~qsa.energies.FunctionalizedCurvature`,
+    or ``Faceting + Perimeter(beta, 2 pi / kstar)``) every term is 0 up to rounding. The
+    scale is therefore never below the largest change of a term when ``kappa`` and ``g``
+    grow by the relative amount ``SCALE_CHANGE = 1e-3`` (the size of the linearization
+    of the terms along that change). Elsewhere the terms are larger than that change
+    (a term of homogeneity ``p`` in ``(kappa, g)`` changes by about ``p 10^-3`` of itself),
+    and the scale is the largest term.
+
     Parameters
     ----------
     energy : Energy
@@ -81,27 +112,32 @@ def residual_scale(energy, curve: Curve) -> float:
     Returns
     -------
     float
-        Positive (1.0 if every term vanishes).
+        Positive (1.0 if every term and every change vanishes).
 
     Examples
     --------
+    >>> import numpy as np
     >>> from qsa import Curve, Fourier
-    >>> from qsa.energies import Faceting
+    >>> from qsa.energies import Faceting, Perimeter
     >>> c = Curve.circle(1.0, Fourier(33))
     >>> round(residual_scale(Faceting(0.1, 5.0), c), 10)  # kappa^2 mu = W'(1) = 6
     6.0
+
+    At ``kappa = kstar = 5`` the change of ``kappa^2 W'(kappa)`` sets the scale,
+    ``k^2 W'(k)`` at ``k = 5 (1 + 10^-3)``, about ``10^-3 kstar^3 W''(kstar) kstar``:
+
+    >>> c = Curve.circle(0.2, Fourier(33))
+    >>> E = Faceting(0.1, 5.0) + Perimeter(5.0, 2 * np.pi * 0.2)
+    >>> k = 5.0 * 1.001
+    >>> bool(np.isclose(residual_scale(E, c), k**2 * k * (k - 5) * (2 * k - 5) / 2))
+    True
     """
-    N = curve.N
-    scale = 0.0
-    for term in energy.terms():
-        own = getattr(term, "velocity_scale", None)
-        if own is not None:  # an energy with its own exact V^n (e.g. a pressure)
-            scale = max(scale, float(own(curve)))
-            continue
-        for grad in term.gradient_parts(curve):
-            mu, xi = grad[:N], curve.g * grad[N:]
-            for t in (apply_laplace_s(curve, mu), curve.kappa**2 * mu, curve.kappa * xi):
-                scale = max(scale, float(np.max(np.abs(t))))
+    terms = _velocity_terms(energy, curve)
+    f = 1.0 + SCALE_CHANGE
+    moved = _velocity_terms(energy, curve.with_kappa(curve.kappa * f).with_g(curve.g * f))
+    scale = max(float(np.max(np.abs(t))) for t in terms)
+    change = max(float(np.max(np.abs(t1 - t))) for t, t1 in zip(terms, moved, strict=True))
+    scale = max(scale, change)
     return scale if scale > 0 else 1.0
 
 

@@ -28,12 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from qsa.constraints import area_gradient_euclidean, constraint_normals
+from qsa.constraints import constraint_normals
 from qsa.curve import Curve
 from qsa.energies import AreaEnergy, EnergySum
+from qsa.measures import area_gradient_euclidean
 
 __all__ = ["split_area_energies", "ConstraintJacobian", "constraint_jacobian",
-           "area_energy_jacobian", "initial_multipliers"]
+           "area_energy_jacobian"]
 
 
 def split_area_energies(energy):
@@ -143,37 +144,3 @@ def constraint_jacobian(constraints, c: Curve, mu) -> ConstraintJacobian:
         dL.append(dl)
     return ConstraintJacobian(diagonal, constraint_normals(constraints, c).T,
                               np.array(rows).reshape(-1, N), np.array(dL, dtype=float))
-
-
-def initial_multipliers(constraints, c: Curve, V) -> np.ndarray:
-    """``mu`` minimising ``|V + sum mu_i n_i|`` in ``<f, h> = int f h dsigma``, shape (m,).
-
-    The multipliers of the constrained gradient flow at ``c``: ``V + sum mu_i n_i`` is
-    the ``<.,.>``-orthogonal projection of ``V`` onto ``{phi : <n_i, phi> = 0}``.
-
-    Parameters
-    ----------
-    constraints : sequence of Constraint
-    c : Curve
-    V : ndarray, shape (N,)
-        The normal velocity of the energy.
-
-    Returns
-    -------
-    ndarray, shape (m,)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import Curve, Fourier
-    >>> from qsa.constraints import FixedArea
-    >>> c = Curve.circle(1.0, Fourier(9))
-    >>> initial_multipliers([FixedArea()], c, np.full(9, 0.25)).round(12).tolist()
-    [-0.25]
-    """
-    n = constraint_normals(constraints, c)
-    if n.shape[0] == 0:
-        return np.zeros(0)
-    w = c.dsigma
-    G = (n * w) @ n.T
-    return -np.linalg.lstsq(G, (n * w) @ V, rcond=1e-12)[0]

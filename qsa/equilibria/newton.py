@@ -17,7 +17,7 @@ import numpy as np
 
 from qsa._checks import integer, real_number
 from qsa.constraints import bind_constraints, constraint_normals
-from qsa.curve import Curve
+from qsa.curve import Curve, check_simple
 from qsa.energies import Energy
 from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
 from qsa.equilibria.result import Equilibrium
@@ -127,6 +127,32 @@ def _at_floor(system, x, F, scale, tol, floor):
     return bool(np.all(parts <= np.maximum(tol, 100 * floor)))
 
 
+def at_round_off_floor(system, x, F, scale, tol, energy=None) -> bool:
+    """Whether the residual ``F`` at ``x`` is as small as rounding lets it be.
+
+    Every part of :meth:`EquilibriumSystem.scaled_parts` is below ``max(tol, 100 x``
+    its change under a perturbation of ``x`` by one rounding unit``)``: the test by
+    which :func:`newton_solve` reports status 1 (converged to the round-off floor), for
+    solvers that run their own Newton iteration (the continuation's corrector).
+
+    Parameters
+    ----------
+    system : EquilibriumSystem
+    x : ndarray, shape (system.size,)
+    F : ndarray, shape (system.size,)
+        ``system.residual(x, energy)``.
+    scale : float
+        :func:`residual_scale` at ``x``.
+    tol : float
+    energy : Energy, optional
+
+    Returns
+    -------
+    bool
+    """
+    return _at_floor(system, x, F, scale, tol, _noise_floor(system, x, scale, energy))
+
+
 def _check_curve(energy, curve):
     if not isinstance(curve, Curve):
         raise ValueError(f"curve must be a qsa Curve, got {type(curve).__name__}")
@@ -222,7 +248,7 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
         try:
             n_lu += 1
             fac = factorize(system.jacobian(x, energy))
-            dx = -fac.solve(F)
+            dx = -_solve(fac, F)
         except (RuntimeError, np.linalg.LinAlgError, ValueError):
             status = -2
             break
@@ -268,10 +294,18 @@ def newton_solve(system, x0, tol=1e-10, maxiter=30, energy=None, line_search=Tru
     return NewtonRun(x, status, np.array(history), n_newton, n_lu, float(np.max(floor)))
 
 
+def _solve(fac, F):
+    """``J^{-1} F`` for the unknowns of ``F``: the Newton matrix may carry extra unknowns
+    (low-rank unfoldings, implicit states) after them, whose rows have zero residual."""
+    b = np.zeros(fac.shape[0])
+    b[:F.size] = F
+    return fac.solve(b)[:F.size]
+
+
 def _natural_test(system, fac, Ft, x, scale, size, t) -> bool:
     """``||J(x)^{-1} F(x + t dx)|| <= (1 - t/4) ||dx||`` (restricted monotonicity test)."""
     try:
-        dxbar = fac.solve(Ft)
+        dxbar = _solve(fac, Ft)
     except (RuntimeError, ValueError):
         return False
     return bool(np.all(np.isfinite(dxbar))
@@ -280,10 +314,10 @@ def _natural_test(system, fac, Ft, x, scale, size, t) -> bool:
 
 def _params(energy, curve, Lambda, constraints=(), mu=()):
     params = {"L": curve.length(), "A": curve.area()}
-    for t in energy.terms():
-        for name in ("alpha", "kstar", "eps", "beta", "L_star", "p"):
-            v = getattr(t, name, None)
-            if isinstance(v, (int, float)) and name not in params:
+    for t in energy.terms():  # every term's scalar parameters (the first term's win)
+        for name, v in t.params().items():
+            if (isinstance(v, (int, float)) and not isinstance(v, bool)
+                    and name not in params):
                 params[name] = float(v)
     if "beta" in params and "L_star" in params:
         params["nu2"] = params["beta"] * (params["L"] - params["L_star"])
@@ -338,8 +372,9 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
     Raises
     ------
     ValueError
-        ``energy``/``curve`` of the wrong type, ``tol <= 0``, ``maxiter < 0`` or bad
-        ``constraints``.
+        ``energy``/``curve`` of the wrong type, a curve that crosses or touches itself
+        (the message names the closest pair of nodes), ``tol <= 0``, ``maxiter < 0`` or
+        bad ``constraints``.
 
     Notes
     -----
@@ -371,6 +406,7 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
     (True, 2.0, 0.5)
     """
     _check_curve(energy, curve)
+    check_simple(curve)
     tol = real_number(tol, "tol", positive=True)
     maxiter = integer(maxiter, "maxiter", minimum=0)
     cons = bind_constraints(constraints, curve)
@@ -418,6 +454,11 @@ def polish_result(energy, system, run: NewtonRun, reparameterized=False) -> Poli
         msg += "; the guess was reparameterized to constant g"
     a = np.array(system.unfolding(x), dtype=float)
     unfolding = a if a.size == 3 else np.concatenate([a, [0.0]])
+    if len(run.history) and res > 10 * run.history[-1] * scale:
+        msg += (f"; max|V^n| is the unfolding's (|a| = {np.abs(a).max():.1e}): the three "
+                "rigid-motion identities of V^n hold on this grid only to its order "
+                "(two-point energies on finite differences), so V^n = -a.phi is the "
+                "discrete equilibrium")
     return PolishResult(c, energy, _params(energy, c, Lambda, cons, mu), Lambda, res, clo, scale,
                         kind="polished", success=status >= 0, message=msg, status=status,
                         n_newton=run.n_newton, n_lu=run.n_lu,

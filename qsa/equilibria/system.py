@@ -48,7 +48,9 @@ in ``<f, h> = int f h dsigma``) and ``H = nabla_I^2 E``, ::
 exact derivatives of the grid's quadrature of ``C`` with ``theta = theta0 + D kappa``.
 Finite-difference grids give a sparse ``N x N`` block bordered by 4 dense
 rows and columns (:func:`assemble_jacobian`), factored by sparse LU: O(N) per Newton
-step.
+step. Two-point energies (whose ``V^n`` is evaluated from the node positions) are
+differentiated through the positions instead, which become extra sparse unknowns on
+finite-difference grids (:mod:`qsa.equilibria.two_point_terms`).
 """
 
 from __future__ import annotations
@@ -56,35 +58,23 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from qsa.constraints import constraint_normals
+from qsa.constraints import constraint_normals, flow_multipliers
 from qsa.curve import Curve
-from qsa.discretize import FiniteDifference
 from qsa.energies.constrained import normal_velocity
 from qsa.equilibria.constraint_terms import (
     area_energy_jacobian,
     constraint_jacobian,
-    initial_multipliers,
     split_area_energies,
+)
+from qsa.equilibria.two_point_terms import (
+    StateBorder,
+    add_velocity_jacobians,
+    split_velocity_terms,
 )
 from qsa.geometry import laplace_s
 from qsa.linalg import SparsePlusLowRank
 
 __all__ = ["EquilibriumSystem", "assemble_jacobian", "equal_arclength"]
-
-
-def _cumulative_transpose(grid, v, Cmat=None):
-    """``C^T v`` for the grid's cumulative-integral matrix ``C`` (``C f = cumulative(f)``)."""
-    v = np.asarray(v, dtype=float)
-    if Cmat is not None:
-        return Cmat.T @ v
-    if isinstance(grid, FiniteDifference):
-        # trapezoid: (C f)_i = h sum_{j<i} (f_j + f_{j+1})/2
-        h = grid.h
-        tail = np.concatenate([np.cumsum(v[::-1])[::-1][1:], [0.0]])  # sum_{i>k} v_i
-        out = h * (tail + 0.5 * v)
-        out[0] = 0.5 * h * tail[0]
-        return out
-    return grid.cumulative_matrix().T @ v
 
 
 def _blocks(H, N):
@@ -208,7 +198,6 @@ class EquilibriumSystem:
             self.phase = w * dk / np.linalg.norm(w * dk)
             self.phase_value = float(self.phase @ c.kappa)
         self.n_unfold = self.phi.shape[0]
-        self._Cmat = None if self.grid.sparse else self.grid.cumulative_matrix()
         self.size = N + 1 + self.n_unfold + self.m
 
     # state <-> curve
@@ -216,11 +205,10 @@ class EquilibriumSystem:
         """Unknowns ``x = [kappa (N,), L, a (n_unfold,), mu (m,)]`` of a constant-g curve.
 
         ``a = 0``; ``mu`` (the constraints' multipliers) defaults to the projection of
-        ``V^n`` of :attr:`energy` (:func:`~qsa.equilibria.constraint_terms.initial_multipliers`).
+        ``V^n`` of :attr:`energy` (:func:`qsa.constraints.flow_multipliers`).
         """
         if mu is None:
-            mu = (initial_multipliers(self.constraints, curve,
-                                      normal_velocity(self.energy, curve))
+            mu = (flow_multipliers(self.constraints, curve, normal_velocity(self.energy, curve))
                   if self.m else np.zeros(0))
         return np.concatenate([curve.kappa, [curve.g[0]], np.zeros(self.n_unfold),
                                np.asarray(mu, dtype=float).reshape(self.m)])
@@ -356,9 +344,10 @@ class EquilibriumSystem:
             Closure (phase, constraint) rows, derivatives w.r.t. kappa.
         D : ndarray (m', m)
             Their derivatives w.r.t. ``(L, a, mu)``.
-        low : list of (P, Q)
+        low : list of (P, Q) and StateBorder
             Low-rank terms ``P Q^T`` of ``A`` (from sparse-plus-low-rank Hessians and
-            area penalties).
+            area penalties) and, on finite-difference grids, the position state of
+            two-point energies (:mod:`qsa.equilibria.two_point_terms`).
         """
         energy = self.energy if energy is None else energy
         N = self.N
@@ -371,6 +360,8 @@ class EquilibriumSystem:
         diag = grid.diag
         # area energies have the exact constant V^n = -F'(A): their own derivatives
         rest, area_terms = split_area_energies(energy)
+        # two-point energies: V^n from the positions, differentiated through them
+        rest, implicit = split_velocity_terms(rest)
         low = []
         if rest is not None:
             grad = rest.gradient(c)
@@ -387,6 +378,7 @@ class EquilibriumSystem:
         else:
             A = diag(np.zeros(N))
             VL = np.zeros(N)
+        A, VL = add_velocity_jacobians(implicit, c, A, VL, low)
         low_area, VL_area = area_energy_jacobian(area_terms, c)
         if low_area is not None:
             low.append(low_area)
@@ -402,8 +394,7 @@ class EquilibriumSystem:
         th = c.theta()
         g = c.g
         cs, sn = np.cos(th), np.sin(th)
-        Ct1 = _cumulative_transpose(grid, -w * g * sn, self._Cmat)
-        Ct2 = _cumulative_transpose(grid, w * g * cs, self._Cmat)
+        Ct1, Ct2 = grid.cumulative_transpose(np.column_stack([-w * g * sn, w * g * cs])).T
         rows = [g * Ct1, g * Ct2, w * g]
         dL = [np.sum(w * cs) + Ct1 @ k, np.sum(w * sn) + Ct2 @ k, np.sum(w * k)]
         m = B.shape[1]
@@ -435,28 +426,35 @@ class EquilibriumSystem:
 
 
 def assemble_jacobian(A, B, Crows, D, low):
-    """The bordered matrix ``[[A, B, P], [Crows, D, 0], [Q^T, 0, -I]]``.
+    """The bordered matrix ``[[A, B, P, VY], [Crows, D, 0, 0], [Q^T, 0, -I, 0], [cK, cL e_1^T, 0, cY]]``.
 
     The low-rank terms ``P Q^T`` of ``A`` are unfolded into extra unknowns ``z = Q^T dx``
-    (rows ``Q^T dx - z = 0``), so the matrix stays sparse.
+    (rows ``Q^T dx - z = 0``), and implicit states
+    (:class:`~qsa.equilibria.two_point_terms.StateBorder`) into extra unknowns ``Y1``
+    with their sparse equations, so the matrix stays sparse.
 
     Parameters
     ----------
     A : matrix, shape (N, N)
     B : ndarray, shape (N, m)
+        Its first column is ``d/dL``.
     Crows : ndarray, shape (m', N)
     D : ndarray, shape (m', m)
-    low : list of (P, Q)
+    low : list of (P, Q) and StateBorder
         As returned by :meth:`EquilibriumSystem.jacobian_parts`.
 
     Returns
     -------
-    sparse CSC matrix (sparse ``A``) or ndarray, square of size ``N + m + r``
-        ``r`` the total rank of ``low`` (``m' = m`` for the square system).
+    sparse CSC matrix (sparse ``A``) or ndarray, square of size ``N + m + r + s``
+        ``r`` the total rank of the low-rank terms, ``s`` the states' size (``m' = m``
+        for the square system). The extra unknowns come last; their rows have zero
+        right-hand side.
     """
-    if low:
-        P = np.hstack([p for p, _ in low])
-        Q = np.hstack([q for _, q in low])
+    pairs = [t for t in low if not isinstance(t, StateBorder)]
+    states = [t for t in low if isinstance(t, StateBorder)]
+    if pairs:
+        P = np.hstack([p for p, _ in pairs])
+        Q = np.hstack([q for _, q in pairs])
         r = P.shape[1]
     else:
         r = 0
@@ -467,7 +465,16 @@ def assemble_jacobian(A, B, Crows, D, low):
             blocks[0].append(sp.csr_matrix(P))
             blocks[1].append(None)
             blocks.append([sp.csr_matrix(Q.T), None, -sp.identity(r)])
+        for st in states:
+            for row in blocks:
+                row.append(None)
+            blocks[0][-1] = st.VY
+            cLB = sp.csr_matrix((st.cL, (np.arange(st.size), np.zeros(st.size, dtype=int))),
+                                shape=(st.size, mB))
+            blocks.append([st.cK, cLB] + [None] * (len(blocks[0]) - 3) + [st.cY])
         return sp.bmat(blocks, format="csc")
+    if states:
+        raise ValueError("implicit-state borders need a sparse (finite-difference) Newton matrix")
     top = np.hstack([A, B] + ([P] if r else []))
     mid = np.hstack([Crows, D] + ([np.zeros((mC, r))] if r else []))
     rows = [top, mid]

@@ -1,6 +1,6 @@
 """The paper's DAE curve flows: residuals and analytic sparse Jacobians.
 
-Two models implement the :class:`~qsa.flows.base.FlowModel` contract:
+Three models implement the :class:`~qsa.flows.base.FlowModel` contract:
 
 ``CHA(eps, beta, rho, A0, l_star, a)``
     Canham-Helfrich + length penalty + adhesion-repulsion (e:CHA-Energy,
@@ -12,8 +12,14 @@ Two models implement the :class:`~qsa.flows.base.FlowModel` contract:
     ``mu = -alpha^2 Delta_s kappa + W'(kappa)`` and ``mss = Delta_s mu`` so that
     every row has a compact stencil: per node ``(x, y, kappa, mu, mss, V)``
     plus ``L``, ``6N + 1`` equations, O(N) Jacobian nonzeros.
+``SecondOrderFlow(energy)``
+    The gradient flow of any local energy (e:LIE: ``SecondOrderEnergy``,
+    ``FunctionalizedCurvature``, ``Faceting`` ...) plus ``Perimeter`` terms, with the
+    same unknowns as ``FacetingFlow``; ``mu`` and ``g d_g E`` are the energy's own exact
+    discrete gradient at ``g = L`` and the Jacobian comes from its exact Hessian
+    (:mod:`qsa.flows.models.second_order`).
 
-Both share the geometric rows (scaled arc length, ap:scaledAL, ``g = L``;
+All share the geometric rows (scaled arc length, ap:scaledAL, ``g = L``;
 ``h = 1/N``; ``D1`` the centred difference, ``D2`` the compact second
 difference, indices mod N; ``t_j = D1 X_j``, ``t^- = (t_y, -t_x)`` the tangent
 rotated by ``-pi/2``, i.e. along the OUTWARD normal):
@@ -23,6 +29,11 @@ rotated by ``-pi/2``, i.e. along the OUTWARD normal):
 * curvature          ``kappa_j - (t_x D2Y - t_y D2X)_j / L^3 = 0``     (N rows)
 * model rows (auxiliary fields and the normal-velocity law)
 * tangential gauge   ``h sum_j Xdot_j . t_j = 0``                      (1 row)
+
+With ``setup(x, y, constraints=[FixedLength(), FixedArea()])`` (or ``solve_flow(...,
+constraints=...)``) the flow keeps the length and/or the polygon area: one multiplier
+unknown and one algebraic row each, the velocity rows corrected by ``mu_L kappa + mu_A``
+(:mod:`qsa.flows.models.constrained`).
 
 Signs follow Conventions and errata, section 3: ``V`` is the OUTWARD normal velocity and a
 counter-clockwise circle of radius R has ``kappa = +1/R``.
@@ -34,7 +45,8 @@ Beyond the :class:`~qsa.flows.base.DAESystem` contract the systems offer
 **sys.bound_constants())`` rebuilds the same system, e.g. on resume),
 ``differential_rows``
 (the rows containing ``ydot``), ``time_derivative(y)`` (the consistent ``ydot``
-at a state on the constraint manifold) and, for CHA, ``adhesion_fields(y)``
+at a state on the constraint manifold; unconstrained flows), ``area(y)`` (the polygon
+area), ``constraints`` and, for CHA, ``adhesion_fields(y)``
 and ``L0``. The implementation lives in :mod:`qsa.flows.models`.
 
 Discrete energy and dissipation: with node weights ``w = L/N`` the energy is
@@ -59,9 +71,12 @@ from qsa.flows.models import (
     CurveDAE,
     FacetingFlow,
     FacetingSystem,
+    SecondOrderFlow,
+    SecondOrderSystem,
     equalize_chords,
+    flow_model,
     self_intersections,
 )
 
-__all__ = ["CHA", "FacetingFlow", "CurveDAE", "CHASystem", "FacetingSystem", "equalize_chords",
-           "self_intersections"]
+__all__ = ["CHA", "FacetingFlow", "SecondOrderFlow", "CurveDAE", "CHASystem", "FacetingSystem",
+           "SecondOrderSystem", "equalize_chords", "flow_model", "self_intersections"]

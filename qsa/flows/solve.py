@@ -12,14 +12,23 @@ Checkpoints are single ``.npz`` files with JSON metadata written atomically
 which the pooled Newton matrices were factorized, so ``resume=`` rebuilds the
 same matrices and a resumed run repeats the uninterrupted one (to round-off;
 in practice bit for bit).
+
+Ctrl-C (SIGINT) during a run in the main thread stops it at the end of the
+current step: the checkpoint is written (to a temporary file when none was
+given) and :class:`FlowInterrupted`, a ``KeyboardInterrupt`` carrying the
+checkpoint's path, is raised; resuming from it repeats the uninterrupted run
+exactly. A second Ctrl-C aborts at once.
 """
 
 from __future__ import annotations
 
+import inspect
 import json
 import os
+import signal
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -27,13 +36,15 @@ import numpy as np
 
 from qsa._checks import integer, real_number
 from qsa._version import __version__
+from qsa.constraints import check_constraints
 from qsa.curve import Curve
+from qsa.flows.models.constrained import polygon_area
 from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
-from qsa.io import load_npz, save_npz
+from qsa.npz import load_npz, save_npz
 from qsa.polygon import self_intersections
 from qsa.resample import closed_samples, resample_closed
 
-__all__ = ["solve_flow", "FlowResult", "prepare_initial"]
+__all__ = ["solve_flow", "FlowResult", "FlowInterrupted", "prepare_initial"]
 
 _KIND = "qsa.flow-checkpoint"
 
@@ -45,6 +56,23 @@ MESSAGES = {
     -1: "Newton failed to converge with the step halved below min_step.",
     -2: "The step limit max_steps was reached before t_final.",
 }
+
+
+class FlowInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped :func:`solve_flow` after a step; the run is saved in ``checkpoint``.
+
+    Attributes
+    ----------
+    checkpoint : str
+        The file to pass as ``resume=`` to continue the run.
+    t : float
+        The time reached (the checkpoint's time).
+    """
+
+    def __init__(self, checkpoint, t):
+        super().__init__(f"interrupted at t = {t:.6g}; checkpoint {checkpoint}")
+        self.checkpoint = checkpoint
+        self.t = t
 
 
 @dataclass(frozen=True)
@@ -123,6 +151,10 @@ class FlowResult:
         """Node positions ``(x, y)`` of snapshot ``i``."""
         return self.system.positions(self.states[i])
 
+    def areas(self) -> np.ndarray:
+        """Polygon areas of the snapshots (conserved by a ``FixedArea`` flow), shape (n,)."""
+        return np.array([polygon_area(*self.system.positions(y)) for y in self.states])
+
     def curvature(self, i=-1):
         """Curvature unknowns of snapshot ``i``, shape (N,)."""
         return self.system.unpack(self.states[i])["kappa"].copy()
@@ -174,7 +206,7 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
                first_step=2e-5, min_step=None, max_step=None, max_steps=1_000_000,
                newton_tol=None, linear_solver="auto", reuse_factorizations=True,
                checkpoint=None, checkpoint_interval=10.0, resume=None, progress=None,
-               callback=None):
+               callback=None, constraints=None):
     """Evolve a closed curve by a DAE flow model to ``t_final`` (physical time).
 
     Parameters
@@ -219,13 +251,20 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
         Seconds between checkpoints (0: after every accepted step).
     resume : str or path, optional
         Continue the run saved in this checkpoint (``initial`` and ``N`` are
-        taken from it; ``model``, ``method`` and ``tol`` must match). Unless
-        ``checkpoint`` is given, the same file keeps being updated.
+        taken from it; ``model``, ``method`` and ``tol`` must match, ``N`` if
+        given too, and ``t_final`` must not be before the checkpoint's time).
+        Unless ``checkpoint`` is given, the same file keeps being updated.
     progress : bool, optional
         tqdm progress bar; default: only when stderr is a terminal.
     callback : callable, optional
         ``callback(t, y, system)`` after every accepted step; returning
         ``True`` stops the run (``status=1``).
+    constraints : sequence of Constraint, optional
+        ``[FixedLength()]``, ``[FixedArea()]`` or both (:mod:`qsa.constraints`): a
+        length- and/or area-preserving flow, the multipliers enforcing the constraints
+        as extra DAE unknowns (:mod:`qsa.flows.models.constrained`). ``None`` targets
+        are the initial curve's values (after resampling); a given target must equal
+        them. On resume they are read from the checkpoint.
 
     Returns
     -------
@@ -236,7 +275,10 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
     ValueError
         For bad input: NaN, open or self-intersecting initial data, ``tol <= 0``,
         a grid too coarse for the model (e.g. ``L/N > l_star``), a checkpoint
-        that is corrupt or belongs to another run.
+        that is corrupt or belongs to another run (another model, method, tol or
+        N), a ``t_final`` before the checkpoint's time.
+    FlowInterrupted
+        Ctrl-C: the run stopped after a step and was saved (see the module notes).
 
     Examples
     --------
@@ -273,13 +315,24 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
             raise ValueError("t_eval must be strictly increasing within [0, t_final]")
 
     options = {"method": method, "tol": tol}
+    constraints = check_constraints(constraints)
+    if constraints and "constraints" not in inspect.signature(model.setup).parameters:
+        raise ValueError(f"constraints: the model {type(model).__name__} does not support "
+                         "length / area constraints")
     if resume is not None:
         loaded = _load_checkpoint(resume, model, options)
         x0, y0, bound = loaded["x_setup"], loaded["y_setup"], loaded["bound"]
+        _check_resume(resume, loaded, N, t_final)
         system = model.setup(x0, y0, **bound)
+        saved = getattr(system, "constraints", ())
+        if constraints and not _same_constraints(constraints, saved):
+            raise ValueError("constraints: the checkpoint was written with "
+                             f"{[k.params() for k in saved]}; resume without constraints= "
+                             "(they are read from the checkpoint)")
     else:
         x0, y0 = prepare_initial(initial, N)
-        system = model.setup(x0, y0)
+        system = model.setup(x0, y0, constraints=constraints) if constraints else \
+            model.setup(x0, y0)
     index = np.union1d(system.error_index, [system.size - 1])
     newton = NewtonSolver(system, newton_tol, index, strategy=linear_solver,
                           reuse=reuse_factorizations)
@@ -306,10 +359,16 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
         return save_npz(path_for_write, arrays, meta)
 
     path_for_write = checkpoint
-    bar = _progress_bar(progress, integ.t, t_final)
-    status, last_write = 0, time.monotonic()
+    status, last_write, bar = 0, time.monotonic(), None
+    stop_request = _StopRequest()
     try:
+        bar = _progress_bar(progress, integ.t, t_final)
         while integ.t < t_final:
+            if stop_request.pending:
+                if checkpoint is None:
+                    path_for_write = checkpoint = _temporary_checkpoint("interrupted")
+                write("interrupted")
+                raise FlowInterrupted(checkpoint, integ.t)
             if integ.n_steps >= max_steps:
                 status = -2
                 break
@@ -330,12 +389,11 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
                 status = 1
                 break
     finally:
+        stop_request.restore()
         if bar is not None:
             bar.close()
     if status == -1 and checkpoint is None:
-        fd, path_for_write = tempfile.mkstemp(prefix="qsa-flow-failed-", suffix=".npz")
-        os.close(fd)
-        checkpoint = path_for_write
+        path_for_write = checkpoint = _temporary_checkpoint("failed")
     if checkpoint is not None:
         write({0: "finished", 1: "stopped", -1: "failed", -2: "max_steps"}[status])
     rec.finish(integ.t, integ.y)
@@ -351,6 +409,13 @@ def solve_flow(model, initial, t_final, N=None, tol=1e-4, method="be", t_eval=No
         n_rejected=integ.n_rejected, n_newton=newton.n_iterations,
         n_lu=newton.n_factorizations, n_newton_failures=integ.n_newton_failures,
         checkpoint=checkpoint, x=X, y=Y, method=method, tol=tol, system=system)
+
+
+def _same_constraints(given, saved) -> bool:
+    """The same kinds in the same order, and equal targets where ``given`` has one."""
+    return len(given) == len(saved) and all(
+        type(a) is type(b) and (a.target is None or a.target == b.target)
+        for a, b in zip(given, saved, strict=True))
 
 
 class _Recorder:
@@ -409,10 +474,63 @@ class _Recorder:
         self.step_L = [float(v) for v in a["step_L"]]
 
 
+class _StopRequest:
+    """A SIGINT handler, while a run lasts, that asks the loop to stop after the step.
+
+    Installed only in the main thread (where Python delivers signals); a second
+    SIGINT restores the previous handler's behaviour (``KeyboardInterrupt`` now).
+    """
+
+    def __init__(self):
+        self.pending = False
+        self.previous = None
+        if threading.current_thread() is threading.main_thread():
+            try:
+                self.previous = signal.signal(signal.SIGINT, self._handle)
+            except (ValueError, OSError):  # not the main interpreter, or no signals
+                self.previous = None
+
+    def _handle(self, signum, frame):
+        if self.pending:
+            self.restore()
+            raise KeyboardInterrupt
+        self.pending = True
+        print("\nstopping after this step to save the checkpoint (Ctrl-C again to abort "
+              "now)", file=sys.stderr, flush=True)
+
+    def restore(self):
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+            self.previous = None
+
+
+def _temporary_checkpoint(why):
+    fd, path = tempfile.mkstemp(prefix=f"qsa-flow-{why}-", suffix=".npz")
+    os.close(fd)
+    return path
+
+
+def _check_resume(path, loaded, N, t_final):
+    """A resumed run keeps its grid and continues forward in time."""
+    n_saved = int(loaded["arrays"]["x_setup"].size)
+    if N is not None and int(N) != n_saved:
+        raise ValueError(f"N={N}: the checkpoint {path} holds a run at N={n_saved}; a resumed "
+                         "run keeps its grid (leave N out, or start a new run)")
+    t_saved = float(loaded["scalars"]["t"])
+    if t_final < t_saved * (1 - 1e-12):
+        raise ValueError(f"t_final={t_final:g} is before the checkpoint's time t={t_saved:g} "
+                         f"({path}); a resumed run continues forward: give t_final >= "
+                         f"{t_saved:g}")
+
+
 def _load_checkpoint(path, model, options):
     arrays, meta = load_npz(path)
     if meta.get("kind") != _KIND:
         raise ValueError(f"resume: {path} is not a flow checkpoint")
+    saved_model = (meta.get("model") or {}).get("model")
+    if saved_model is not None and saved_model != getattr(model, "name", saved_model):
+        raise ValueError(f"resume: {path} is a checkpoint of a {saved_model} flow, not of "
+                         f"{model.name}")
     need = ("x_setup", "y_setup", "y", "history_t", "history_y", "pool_c", "pool_y",
             "pool_ydot", "newton_theta", "be_slope", "snap_t", "snap_y", "snap_E", "snap_L",
             "step_t", "step_E", "step_L")

@@ -8,9 +8,11 @@
 * :mod:`qsa.paper.runs` -- :func:`run_facet`, :func:`run_cha`,
   :func:`run_folding`, :func:`resolution_check`; :mod:`qsa.paper.appendix` --
   :func:`run_convergence` (Table ap:t1) and :func:`run_timesteps`.
-* :mod:`qsa.paper.fronts` -- :func:`compare_fronts` and
-  :func:`compare_eigenvalues`: the front-position ODE against the DAE flow and
-  the full linearization.
+* :mod:`qsa.paper.fronts` -- :func:`compare_fronts`: the front-position ODE
+  against the DAE flow up to the first collision; :mod:`qsa.paper.eigenvalues` --
+  :func:`compare_eigenvalues`: against the full linearization, mode by mode;
+  :mod:`qsa.paper.coarsening` -- :func:`compare_coarsening`: through a whole
+  coarsening (f:facet's, ``qsa reproduce coarsening``).
 
 Results (:mod:`qsa.paper.results`) are frozen dataclasses with named fields;
 ``summary()`` gives the JSON that ``qsa reproduce NAME --json`` prints. The
@@ -30,6 +32,13 @@ from qsa.paper.appendix import (
     TimestepRun,
     run_convergence,
     run_timesteps,
+)
+from qsa.paper.coarsening import (
+    CoarseningComparison,
+    DAECoarsening,
+    SequenceEvent,
+    compare_coarsening,
+    dae_coarsening,
 )
 from qsa.paper.fronts import (
     DAESpread,
@@ -60,8 +69,11 @@ from qsa.paper.scenarios import (
     FacetScenario,
     FoldBalance,
     Scenario,
+    circle_balance_length,
     front_scenario,
+    random_polygon,
     scenario_splice,
+    spinodal_radius,
 )
 
 __all__ = [
@@ -73,5 +85,7 @@ __all__ = [
     "SelfIntersectionReport", "Coarsening", "CoarseningEvent", "ConvergenceRun",
     "ConvergenceStudy", "StepCount", "TimestepRun",
     "compare_fronts", "compare_eigenvalues", "FrontComparison", "VariableLengthComparison",
-    "DAESpread", "EigenvalueComparison",
+    "DAESpread", "EigenvalueComparison", "compare_coarsening", "dae_coarsening",
+    "CoarseningComparison", "DAECoarsening", "SequenceEvent", "random_polygon",
+    "spinodal_radius", "circle_balance_length",
 ]

@@ -8,9 +8,17 @@ import time
 
 import numpy as np
 
-from qsa.io import json_default, load_npz, save_npz
+from qsa.npz import json_default, load_npz, save_npz
 
-__all__ = ["write_output", "Series", "checkpoint_time"]
+__all__ = ["write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
+
+
+class _Summarised:
+    """``to_json()`` for results with a ``summary()``."""
+
+    def to_json(self, indent=2):
+        """``summary()`` as JSON text."""
+        return json.dumps(self.summary(), indent=indent, default=json_default)
 
 
 def write_output(out, name, arrays, summary):
@@ -63,3 +71,9 @@ def checkpoint_time(path):
     """Time of the last step stored in a ``solve_flow`` checkpoint."""
     arrays, _ = load_npz(path)
     return float(arrays["step_t"][-1])
+
+
+def checkpoint_nodes(path):
+    """Number of nodes of the run stored in a ``solve_flow`` checkpoint."""
+    arrays, _ = load_npz(path)
+    return int(arrays["x_setup"].size)

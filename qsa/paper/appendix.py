@@ -164,16 +164,33 @@ def run_convergence(scenario=CONVERGENCE, Ns=None, *, tol=None, t_final=None,
 # ---------------------------------------------------------------- time steps
 @dataclass(frozen=True)
 class StepCount:
-    """Accepted steps, rejections, Newton iterations and CPU seconds of one run."""
+    """Accepted steps, rejections, Newton iterations, factorizations and CPU seconds of a run.
 
-    steps: int
-    rejected: int
-    newton: int
+    ``steps``, ``rejected`` and ``newton`` are read-only aliases of the counters (the
+    former names).
+    """
+
+    n_steps: int
+    n_rejected: int
+    n_newton: int
     cpu_seconds: float
+    n_lu: int = 0
+
+    @property
+    def steps(self) -> int:
+        return self.n_steps
+
+    @property
+    def rejected(self) -> int:
+        return self.n_rejected
+
+    @property
+    def newton(self) -> int:
+        return self.n_newton
 
     def summary(self):
-        return {"steps": self.steps, "rejected": self.rejected, "newton": self.newton,
-                "cpu_seconds": self.cpu_seconds}
+        return {"n_steps": self.n_steps, "n_rejected": self.n_rejected,
+                "n_newton": self.n_newton, "n_lu": self.n_lu, "cpu_seconds": self.cpu_seconds}
 
 
 def count_steps(tols, N=100, t_final=0.2, method="be", force_normal="centred",
@@ -189,7 +206,7 @@ def count_steps(tols, N=100, t_final=0.2, method="be", force_normal="centred",
         if not res.success:
             raise RuntimeError(f"tol={tol:g}: {res.message}")
         out[tol] = StepCount(res.n_steps, res.n_rejected, res.n_newton,
-                             time.process_time() - t0)
+                             time.process_time() - t0, res.n_lu)
     return out
 
 
@@ -227,11 +244,12 @@ class TimestepRun(_Summarised):
             return None
         paper = self.scenario.paper_steps
         ptols = sorted(paper, reverse=True)
-        out = {"be": growth_per_decade(self.tols, [self.be[t].steps for t in self.tols]),
+        out = {"be": growth_per_decade(self.tols, [self.be[t].n_steps for t in self.tols]),
                "paper": growth_per_decade(ptols, [paper[t] for t in ptols]),
                "sqrt10": float(np.sqrt(10))}
         if self.bdf2:
-            out["bdf2"] = growth_per_decade(self.tols, [self.bdf2[t].steps for t in self.tols])
+            out["bdf2"] = growth_per_decade(self.tols,
+                                            [self.bdf2[t].n_steps for t in self.tols])
         return out
 
     def summary(self):

@@ -21,25 +21,23 @@ is also reported at fixed fractions of ``t_c`` and with the ODE time rescaled
 by the ratio of the collision times (``t -> t t_c^ODE / t_c^DAE``), which
 removes the rate error and measures the shape of the trajectory.
 
-:func:`compare_eigenvalues` compares the slow eigenvalues of the reduced
-Jacobian with the full linearization at a polished regular polygon.
+:func:`compare_eigenvalues` (:mod:`qsa.paper.eigenvalues`, importable from here) compares
+the slow eigenvalues of the reduced Jacobian with the full linearization mode by mode.
 """
 
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from qsa import FiniteDifference, Fourier
-from qsa.equilibria import polish
+from qsa import FiniteDifference
 from qsa.flows import FacetingFlow, solve_flow
+from qsa.paper.eigenvalues import EigenvalueComparison, compare_eigenvalues
 from qsa.paper.results import _Summarised
 from qsa.paper.scenarios import SCENARIOS, Scenario, front_scenario, scenario_splice
 from qsa.reduction import FrontODE, detect_fronts, track_flow
-from qsa.spectra import spectrum
 
 __all__ = ["SCENARIOS", "Scenario", "FrontComparison", "VariableLengthComparison", "DAESpread",
            "EigenvalueComparison", "scenario_splice", "compare_fronts", "compare_eigenvalues"]
@@ -228,7 +226,7 @@ def _centred(P, L):
 
 def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, method="bdf2",
                    rtol=1e-4, fractions=FRACTIONS, correction=None, reference_N=None,
-                   alpha=None, kstar=None, beta=None):
+                   alpha=None, kstar=None, beta=None, progress=False):
     """Run the DAE flow and the front ODE from the same splice and compare them.
 
     Parameters
@@ -259,6 +257,9 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
         errors near the collision are to be read.
     alpha, kstar, beta : float, optional
         Replace the scenario's values.
+    progress : bool or None
+        Progress bar of the DAE runs (:func:`qsa.flows.solve_flow`; ``None``: on a
+        terminal).
 
     Returns
     -------
@@ -272,7 +273,7 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
     """
     sc = front_scenario(scenario, alpha=alpha, kstar=kstar, beta=beta)
     t_final = sc.t_final if t_final is None else float(t_final)
-    ref = _dae_fronts(sc, N, t_final, tol, method)
+    ref = _dae_fronts(sc, N, t_final, tol, method, progress)
     t, dae, tc_dae, L, p0, facet_min = ref.t, ref.positions, ref.t_c, ref.L, ref.p0, ref.facet_min
 
     ode = FrontODE(sc.alpha, sc.kstar, L, correction=correction)
@@ -346,7 +347,7 @@ class _DAEFronts:
     cpu: float
 
 
-def _dae_fronts(sc, N, t_final, tol, method):
+def _dae_fronts(sc, N, t_final, tol, method, progress=False):
     eq = sc.splice(FiniteDifference(N))
     p0 = np.array(eq.params["positions"])
     L = eq.params["L"]
@@ -359,7 +360,7 @@ def _dae_fronts(sc, N, t_final, tol, method):
 
     start = time.process_time()
     res = solve_flow(FacetingFlow(sc.alpha, sc.kstar, sc.beta, L), eq.curve.positions(),
-                     t_final, N=N, tol=tol, method=method, callback=stop, progress=False)
+                     t_final, N=N, tol=tol, method=method, callback=stop, progress=progress)
     cpu = time.process_time() - start
     tracks = track_flow(res, sc.kstar)
     tc = tracks.first_collision.time if tracks.events else np.nan
@@ -410,108 +411,3 @@ def _variable_length(sc, ref, t_final, fractions, wide, rtol=1e-4, correction=No
         separated_until=float(t[sep][-1] / tc_dae) if np.any(sep) else np.nan,
         time_ode=cpu, speedup=ref.cpu / cpu, n_rhs_ode=int(sol.n_rhs),
         L_change=float(sol.segments[0].L[-1] - L))
-
-
-# ---------------------------------------------------------------- eigenvalues
-@dataclass(frozen=True, eq=False)
-class EigenvalueComparison(_Summarised):
-    """Result of :func:`compare_eigenvalues`.
-
-    Attributes
-    ----------
-    scenario : Scenario
-    reduced, full : ndarray, shape (2n - 4,)
-        Slow eigenvalues of the reduced Jacobian and the matched ones of the full
-        linearization, sorted descending.
-    rigid : ndarray, shape (3,)
-        The three eigenvalues of the full spectrum nearest 0 (rigid motions).
-    max_rel_diff : float
-        ``max |reduced - full| / |full|``.
-    polish_residual : float
-    polish_success : bool
-    N : int
-        Fourier nodes of the full linearization.
-    """
-
-    scenario: Scenario
-    reduced: np.ndarray
-    full: np.ndarray
-    rigid: np.ndarray
-    max_rel_diff: float
-    polish_residual: float
-    polish_success: bool
-    N: int
-
-    @property
-    def n_corners(self):
-        return len(self.scenario.angles)
-
-    def __getitem__(self, key):
-        """``result["max_rel_diff"]``: the dictionary access of earlier versions (deprecated)."""
-        warnings.warn("compare_eigenvalues returns an EigenvalueComparison: use its attributes "
-                      "(or summary()[key]) instead of result[key]", DeprecationWarning,
-                      stacklevel=2)
-        return self.summary()[key]
-
-    def summary(self):
-        return {"reduced": self.reduced.tolist(), "full": self.full.tolist(),
-                "rigid": self.rigid.tolist(), "max_rel_diff": self.max_rel_diff,
-                "polish_residual": self.polish_residual, "polish_success": self.polish_success,
-                "N": self.N, "n_corners": self.n_corners}
-
-
-def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=285, angles=None,
-                        facets=None, *, correction=None):
-    """Slow eigenvalues of the reduced Jacobian against the full linearization.
-
-    The full linearization (``qsa.spectra.spectrum``, ``gauge="normal"``, the
-    operator ``J = -[M^dagger L_Lambda M(., 0)]_1``) is only a linearization at an
-    equilibrium, so the splice (by default a regular polygon with equal facets,
-    an equilibrium by symmetry up to exponentially small terms) is polished
-    first (:func:`qsa.equilibria.polish`); the reduced Jacobian
-    (:meth:`FrontODE.eigenvalues`) is taken at the splice positions. Of the full
-    spectrum the ``2N - 1`` eigenvalues nearest 0 are the three rigid motions
-    (discretely ``~ eps |J|``) and the ``2N - 4`` slow front modes.
-
-    Parameters
-    ----------
-    scenario : int, str or Scenario
-        A number of corners (the regular polygon with facets ``facet``, or the
-        polygon of ``angles`` in degrees and ``facets``), or a front scenario.
-    facet, angles, facets
-        Only with a number of corners.
-    alpha, kstar : float, optional
-        Replace the scenario's (default 0.1 and 5).
-    N : int
-        Fourier nodes (odd).
-    correction : {None, "newton"}
-        Force of the reduction (:class:`qsa.reduction.FrontODE`).
-
-    Returns
-    -------
-    EigenvalueComparison
-    """
-    if isinstance(scenario, (int, np.integer)):
-        n = int(scenario)
-        sc = Scenario.regular(n, facet)
-        if angles is not None or facets is not None:
-            sc = Scenario("polygon", tuple(sc.angles if angles is None else angles),
-                          tuple(sc.facets if facets is None else facets),
-                          f"polygon with {n} corners", sc.t_final)
-    else:
-        sc = scenario
-    sc = front_scenario(sc, alpha=alpha, kstar=kstar)
-    eq = sc.splice(Fourier(N))
-    p = np.array(eq.params["positions"])
-    red = FrontODE(sc.alpha, sc.kstar, eq.params["L"], correction=correction).eigenvalues(p)
-    pol = polish(eq.energy, eq.curve)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        spec = spectrum(pol.energy, pol.curve, gauge="normal")
-    ev = np.real(np.asarray(spec.eigenvalues))
-    near = ev[np.argsort(np.abs(ev))][: red.size + 3]  # sorted by |lambda|
-    rigid, slow = near[:3], np.sort(near[3:])[::-1]
-    red = np.sort(np.real(red))[::-1]
-    rel = np.abs(red - slow) / np.abs(slow)
-    return EigenvalueComparison(sc, red, slow, rigid, float(rel.max()), float(pol.residual),
-                                bool(pol.success), int(N))

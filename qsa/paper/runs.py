@@ -47,8 +47,8 @@ from qsa.flows.analysis import (
     rotation_defect,
 )
 from qsa.flows.solve import solve_flow
-from qsa.io import load_npz, save_npz
-from qsa.paper._files import Series, checkpoint_time, write_output
+from qsa.npz import load_npz, save_npz
+from qsa.paper._files import Series, checkpoint_nodes, checkpoint_time, write_output
 from qsa.paper.results import (
     CHARun,
     Crossing,
@@ -60,7 +60,8 @@ from qsa.paper.results import (
 )
 from qsa.paper.scenarios import CHAScenario, FacetScenario
 
-__all__ = ["run_facet", "run_cha", "run_folding", "resolution_check", "coarsening_events",
+__all__ = ["run_facet", "run_cha", "cha_run_name", "run_folding", "resolution_check",
+           "coarsening_events",
            "write_output"]
 
 
@@ -82,8 +83,8 @@ def _facet_state(system, y, kstar, band):
 
 
 def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=None,
-              band=None, spinodal_time=1e-4, spinodal_step=2e-6, n_snapshots=40,
-              checkpoint_interval=10.0):
+              band=None, spinodal_time=None, spinodal_step=2e-6, n_snapshots=40,
+              checkpoint_interval=10.0, callback=None):
     """Faceting coarsening (f:facet, f:facet_energy).
 
     Parameters
@@ -102,12 +103,15 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
     band : float, optional
         Hysteresis half-width of the front count (default ``0.1 kstar``).
     spinodal_time, spinodal_step : float
-        The first phase ``[0, spinodal_time]`` is integrated with steps
-        ``<= spinodal_step`` (see the module notes); ``spinodal_time = 0``
-        skips it.
+        The first phase ``[0, spinodal_time]`` (default the scenario's) is
+        integrated with steps ``<= spinodal_step`` (see the module notes);
+        ``spinodal_time = 0`` skips it.
     n_snapshots : int
         Log-spaced snapshots kept for the symmetry history (plus the figure
         times).
+    callback : callable, optional
+        ``callback(t, y, system)`` after every accepted step of both phases (``t``
+        on the run's clock), e.g. to record the states.
 
     Returns
     -------
@@ -120,6 +124,7 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
     sc = FacetScenario() if scenario is None else scenario
     t_final = sc.t_final if t_final is None else float(t_final)
     band = 0.1 * sc.kstar if band is None else float(band)
+    spinodal_time = sc.spinodal_time if spinodal_time is None else float(spinodal_time)
     model = sc.model()
     wall0 = time.perf_counter()
     ck = None if out is None else os.path.join(out, "facet_checkpoint.npz")
@@ -130,9 +135,12 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
         u = system.unpack(y)
         series.append(t, fronts=count_fronts(u["kappa"], sc.kstar / 2, band),
                       R_kappa=functional_residual(u["mu"]), energy=system.energy(y))
+        if callback is not None:
+            callback(t, y, system)
 
     snaps = np.union1d(np.geomspace(min(spinodal_time or 1e-4, t_final) / 10, t_final,
-                                    n_snapshots), [t for t in sc.figure_times if t <= t_final])
+                                    n_snapshots),
+                         [t for t in sc.physical_figure_times if t <= t_final])
     # the capped phase never takes the whole run (stage 2 needs a positive length)
     t1 = spinodal_time if spinodal_time < t_final else 0.5 * t_final
     stage1 = None
@@ -151,7 +159,8 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
         first = model.setup(x0, y0)
         observe(0.0, first.y0, first)
         if t1 > 0:
-            res1 = solve_flow(model, start, t1, N=sc.N, tol=sc.tol, first_step=spinodal_step,
+            res1 = solve_flow(model, start, t1, N=sc.N, tol=sc.tol, method=sc.method,
+                              first_step=spinodal_step,
                               max_step=spinodal_step, t_eval=snaps[snaps <= t1],
                               progress=progress, callback=lambda t, y, s: observe(t, y, s))
             if not res1.success:
@@ -164,12 +173,14 @@ def run_facet(scenario=None, out=None, *, t_final=None, resume=False, progress=N
         else:
             t1 = 0.0
     later = snaps[snaps > t1] - t1
-    res2 = solve_flow(model, start, t_final - t1, N=sc.N, tol=sc.tol,
-                      t_eval=later if later.size else None, checkpoint=ck,
-                      resume=ck if resuming else None, progress=progress,
-                      checkpoint_interval=checkpoint_interval,
-                      callback=lambda t, y, s: observe(t + t1, y, s))
-    series.save()
+    try:
+        res2 = solve_flow(model, start, t_final - t1, N=sc.N, tol=sc.tol, method=sc.method,
+                          t_eval=later if later.size else None, checkpoint=ck,
+                          resume=ck if resuming else None, progress=progress,
+                          checkpoint_interval=checkpoint_interval,
+                          callback=lambda t, y, s: observe(t + t1, y, s))
+    finally:  # also on Ctrl-C, so that a resumed run finds the series up to its checkpoint
+        series.save()
     return _facet_run(sc, out, series, stage1, res2, t1, t_final, wall0, band, ck)
 
 
@@ -206,6 +217,13 @@ def _facet_run(sc, out, series, stage1, res, t1, t_final, wall0, band, ck):
 
 
 # ----------------------------------------------------------------------- CHA
+def cha_run_name(scenario):
+    """File stem of a CHA run: ``cha_rho1.3`` (``_lstar0.1`` added for another kernel length,
+    so that runs with another l* do not share checkpoints)."""
+    return f"cha_rho{scenario.rho:g}" + ("" if scenario.l_star == CHAScenario.l_star
+                                         else f"_lstar{scenario.l_star:g}")
+
+
 def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=False,
             progress=None, snapshot_times=None, checkpoint_interval=30.0,
             monitor_every=1):
@@ -239,10 +257,10 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     """
     sc = CHAScenario() if scenario is None else scenario
     t_final = sc.t_final if t_final is None else float(t_final)
+    N_given = N
     N = sc.N if N is None else int(N)
-    if name is None:  # runs with another kernel length do not share checkpoints
-        name = f"cha_rho{sc.rho:g}" + ("" if sc.l_star == CHAScenario.l_star
-                                        else f"_lstar{sc.l_star:g}")
+    if name is None:
+        name = cha_run_name(sc)
     model = sc.model()
     wall0 = time.perf_counter()
     ck = None if out is None else os.path.join(out, f"{name}_checkpoint.npz")
@@ -275,14 +293,18 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     snaps = snaps[(snaps > 0) & (snaps <= t_final)]
     resuming = bool(resume and ck is not None and os.path.isfile(ck))
     if resuming:
+        if N_given is None:  # a resumed run keeps its grid
+            N = checkpoint_nodes(ck)
         t_ck = checkpoint_time(ck)
         series.load(t_ck)
         saved = _load_crossing(crossing_file, t_ck)
         monitor.first_crossing = None if saved is None else asdict(saved)
-    res = solve_flow(model, sc.initial(N), t_final, N=N, tol=sc.tol, t_eval=snaps,
-                     checkpoint=ck, resume=ck if resuming else None, progress=progress,
-                     checkpoint_interval=checkpoint_interval, callback=observe)
-    series.save()
+    try:
+        res = solve_flow(model, sc.initial(N), t_final, N=N, tol=sc.tol, t_eval=snaps,
+                         checkpoint=ck, resume=ck if resuming else None, progress=progress,
+                         checkpoint_interval=checkpoint_interval, callback=observe)
+    finally:  # also on Ctrl-C, so that a resumed run finds the series up to its checkpoint
+        series.save()
     system = res.system
     a = series.arrays()
     fc = monitor.first_crossing

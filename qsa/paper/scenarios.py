@@ -29,14 +29,16 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
+from scipy.optimize import brentq
 
 from qsa.equilibria import splice_polygon
 from qsa.flows.models import CHA, FacetingFlow
 from qsa.resample import resample_closed
 
 __all__ = ["FacetScenario", "CHAScenario", "FoldBalance", "ConvergenceScenario", "CONVERGENCE",
-           "Scenario", "SCENARIOS", "front_scenario", "scenario_splice", "crenellated_radius",
-           "perturbed_circle_radius"]
+           "Scenario", "SCENARIOS", "random_polygon", "front_scenario", "scenario_splice",
+           "crenellated_radius", "perturbed_circle_radius", "circle_growth_rate",
+           "spinodal_radius", "circle_balance_length"]
 
 #: oversampling of the analytic curve before resampling to equal chords
 _FINE = 8
@@ -81,44 +83,126 @@ def _polar_nodes(r, N, n_fine):
     return x, y
 
 
+def circle_growth_rate(k, R, alpha, kstar):
+    """Growth rate of the normal mode ``cos k theta`` on the circle of radius ``R`` (k >= 2).
+
+    ``-((k^2 - 1)^2 / R^4) (alpha^2 k^2 / R^2 + W''(1/R))`` for the quartic well
+    (positive in the spinodal range ``W''(1/R) < 0``).
+    """
+    k = np.asarray(k, dtype=float)
+    kappa = 1.0 / R
+    d2W = 0.5 * (6 * kappa**2 - 6 * kappa * kstar + kstar**2)
+    return -((k**2 - 1) ** 2 / R**4) * (alpha**2 * k**2 / R**2 + d2W)
+
+
+def spinodal_radius(k, alpha, kstar, branch="large"):
+    """Radius of the circle whose growth rate is largest at wavenumber ``k`` (continuous in k).
+
+    ``d lambda_k / d k = 0`` at ``k`` has two roots in the spinodal range, a small
+    (highly curved, fast) and a large circle; ``branch`` picks one.
+
+    Examples
+    --------
+    >>> round(spinodal_radius(9, 0.1, 5.0), 4), round(spinodal_radius(9, 0.1, 5.0, "small"), 4)
+    (0.7523, 0.4477)
+    """
+    if branch not in ("small", "large"):
+        raise ValueError(f"branch must be 'small' or 'large', got {branch!r}")
+    h = 1e-4
+
+    def slope(R):
+        return circle_growth_rate(k + h, R, alpha, kstar) - circle_growth_rate(k - h, R, alpha,
+                                                                               kstar)
+
+    lo, hi = 6 / (kstar * (3 + math.sqrt(3))), 6 / (kstar * (3 - math.sqrt(3)))  # 1/kappa range
+    R = np.linspace(lo * 1.0001, hi * 0.9999, 2001)
+    sg = np.sign(slope(R))
+    roots = [brentq(slope, R[i], R[i + 1]) for i in np.nonzero(sg[:-1] * sg[1:] < 0)[0]]
+    if len(roots) < 2:
+        raise ValueError(f"no circle in the spinodal range has its fastest mode at k={k!r}")
+    return float(roots[-1] if branch == "large" else roots[0])
+
+
+def circle_balance_length(R, alpha, kstar, beta):
+    """``L*`` that makes the circle of radius ``R`` an equilibrium of faceting + perimeter.
+
+    ``beta (2 pi R - L*) = kappa0 W'(kappa0) - W(kappa0)``, ``kappa0 = 1/R`` (quartic
+    well; ``alpha`` does not enter: the circle's curvature is constant).
+    """
+    k0 = 1.0 / R
+    W = k0**2 * (k0 - kstar) ** 2 / 4
+    dW = k0 * (k0 - kstar) * (2 * k0 - kstar) / 2
+    return float(2 * np.pi * R - (k0 * dW - W) / beta)
+
+
 @dataclass(frozen=True)
 class FacetScenario:
     """Faceting coarsening from a perturbed circle (f:facet, f:facet_energy).
 
-    The defaults give the paper's scenario: spinodal decomposition of the
-    circle of curvature ``1/R = 2.27`` (inside the spinodal range
-    ``(1.06, 3.94)`` for kappa* = 5) into 18 fronts, which coarsen to 6 (an
-    equilateral triangle with kappa*-rounded corners). ``L_star`` is the
-    length the perimeter penalty favours; ``noise`` the relative amplitude of
-    the radial perturbation in Fourier modes ``modes`` (seeded).
+    The paper gives alpha = 0.1, beta = 5, kappa* = 5 and N = 600 but neither the
+    circle nor L*; they are chosen a priori from its text:
 
-    Why these numbers: on the circle the growth rate
-    ``-(k^2 - 1)^2 (alpha^2 k^2 / R^2 + W''(1/R)) / R^4`` peaks at k = 9 for
-    R = 0.44 (9 corner/facet pairs = 18 fronts); L* = 4.045 is the length of
-    the final triangle's neighbourhood (the run ends at L = 4.0456). Measured
-    (qsa reproduce facet): 18 fronts at t = 1.7e-5, six events 18 -> 16 -> ...
-    -> 6 at t = 3.7e-5 ... 0.138; at the paper's last figure time t = 2 the
-    corners still turn by 1.99 / 2.19 / 2.10 (rotation defect 0.099): the
-    symmetrising interaction is exponentially weak and the defect decays like
-    exp(-0.013 t), to 6e-4 at the default t_final = 400.
+    * ``R`` (default :func:`spinodal_radius`): "the initial spinodal
+      decomposition yields 18 fronts" -- the circle whose fastest-growing mode
+      is k = 9. Two circles have it (R = 0.448 and 0.752); the paper's
+      residual "converges at t = 2e-4", i.e. physical time 4e-4 (the paper's
+      clock runs at half the physical time, ``paper_clock``), which is the
+      spinodal time ``ln(1 / noise) / lambda_9`` of the large circle
+      (lambda_9 = 1.41e4; the small one's is 3.2e5, fronts by t = 2e-5).
+    * ``L_star`` (default :func:`circle_balance_length`): the unperturbed circle
+      is an equilibrium ("a slightly perturbed circle"), so the perimeter term
+      does not drive the start.
+    * ``noise``: relative amplitude of the radial perturbation in the Fourier
+      modes ``modes``, random phases (seeded): "slightly perturbed"; 3e-5 puts
+      the formation of the 18 fronts, ``ln(A / noise) / lambda_9`` with the
+      saturation amplitude ``A ~ 7e-3`` of the circle's modes, at the paper's
+      t = 2e-4 (physical 4e-4).
+
+    ``paper_clock``: the code behind the paper advances its clock by one step
+    per pass of two steps, so its times are half the physical ones (the
+    appendix's convergence study shows it); ``figure_times`` are the paper's
+    printed times, :attr:`physical_figure_times` the physical ones.
+    ``spinodal_time`` (default 1.3 spinodal times) ends the capped-step first
+    phase of :func:`qsa.paper.run_facet`; ``method`` and ``tol`` are the DAE's
+    (the paper's backward Euler by default).
     """
 
     alpha: float = 0.1
     beta: float = 5.0
     kstar: float = 5.0
     N: int = 600
-    L_star: float = 4.045
-    R: float = 0.44
-    noise: float = 1e-5
+    L_star: float = None
+    R: float = None
+    noise: float = 3e-5
     modes: tuple = (2, 15)
     seed: int = 1
-    #: the paper's figure stops at t = 2; the 3-fold symmetry defect of the
-    #: triangle then decays like exp(-0.013 t) (measured), reaching 1e-3 near t = 360
+    #: the paper's figure stops at t = 2 (its clock); the 3-fold symmetry defect of the
+    #: triangle then decays on the slow scale of the last corners' interaction
     t_final: float = 400.0
     tol: float = 1e-4
-    #: the paper's figure times (f:facet)
+    method: str = "be"
+    spinodal_time: float = None
+    #: the paper's figure times (f:facet), on its clock
     figure_times: tuple = (2.2e-4, 9.8e-3, 3.2e-2, 1.35e-1, 2.0)
+    paper_clock: float = 2.0
     name: str = field(default="facet")
+
+    def __post_init__(self):
+        if self.R is None:
+            object.__setattr__(self, "R", spinodal_radius(9, self.alpha, self.kstar))
+        if self.L_star is None:
+            object.__setattr__(self, "L_star", circle_balance_length(self.R, self.alpha,
+                                                                     self.kstar, self.beta))
+        if self.spinodal_time is None:
+            rate = float(np.max(circle_growth_rate(np.arange(2, 40), self.R, self.alpha,
+                                                   self.kstar)))
+            t_s = math.log(0.1 / self.noise) / rate if rate > 0 and self.noise > 0 else 1e-4
+            object.__setattr__(self, "spinodal_time", 1.3 * t_s)
+
+    @property
+    def physical_figure_times(self):
+        """The figure times on the physical clock (``paper_clock`` times the printed ones)."""
+        return tuple(self.paper_clock * t for t in self.figure_times)
 
     def model(self):
         return FacetingFlow(alpha=self.alpha, kstar=self.kstar, beta=self.beta,
@@ -449,6 +533,49 @@ SCENARIOS = {
         "short-facet", (90.0, 90.0, 80.0, 100.0), (0.5, 0.28, 0.5, 0.35),
         "quadrilateral (right trapezoid) with one short facet that collapses", 0.09),
 }
+
+
+def random_polygon(n_corners, seed, *, facets=(0.4, 0.6), short=(0.26, 0.3), n_short=1,
+                   angle_spread=0.15, t_final=1.0, **params):
+    """A rounded polygon with random unequal corners and facets, ``n_short`` of them short.
+
+    Exterior angles ``360/n (1 + angle_spread u_i)`` (``u_i`` uniform on ``[-1, 1]``,
+    rescaled to sum to 360 degrees); facets uniform in ``facets``, except ``n_short``
+    at random places uniform in ``short`` (these collapse first, in the order of their
+    lengths up to the interactions). Drawn from ``numpy.random.default_rng(seed)``.
+
+    Parameters
+    ----------
+    n_corners, seed : int
+    facets, short : (float, float)
+    n_short : int
+    angle_spread : float
+    t_final : float
+    **params
+        ``alpha``, ``kstar``, ``beta`` of the :class:`Scenario`.
+
+    Returns
+    -------
+    Scenario
+
+    Examples
+    --------
+    >>> sc = random_polygon(5, seed=3)
+    >>> len(sc.angles), round(sum(sc.angles), 9), sum(f < 0.3 for f in sc.facets)
+    (5, 360.0, 1)
+    """
+    n = int(n_corners)
+    if n < 3 or not 0 <= int(n_short) < n:
+        raise ValueError(f"need n_corners >= 3 and 0 <= n_short < n_corners, got "
+                         f"{n_corners!r}, {n_short!r}")
+    rng = np.random.default_rng(seed)
+    a = 1 + angle_spread * rng.uniform(-1, 1, n)
+    angles = tuple(float(x) for x in 360.0 * a / a.sum())
+    f = rng.uniform(*facets, n)
+    idx = rng.choice(n, int(n_short), replace=False)
+    f[idx] = rng.uniform(*short, int(n_short))
+    return Scenario(f"random-{n}-{seed}", angles, tuple(float(x) for x in f),
+                    f"random polygon with {n} corners (seed {seed})", float(t_final), **params)
 
 
 def front_scenario(scenario, **overrides):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from qsa.continuation import Branch
 from qsa.plotting._core import new_figure
 
 __all__ = ["bifurcation_diagram"]
@@ -58,8 +59,6 @@ def bifurcation_diagram(branches, measure="energy", ax=None, insets=True, colors
     >>> ax.get_xlabel(), len(ax.child_axes) == 1
     ('L_star', True)
     """
-    from qsa.continuation import Branch
-
     if isinstance(branches, Branch):
         branches = [branches]
     branches = [b for b in branches if b.points]

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from qsa.plotting._core import figure_pair
+from qsa.plotting._core import figure_pair, new_figure
 
-__all__ = ["plot_front_tracks"]
+__all__ = ["plot_front_tracks", "plot_coarsening"]
 
 
 def plot_front_tracks(comparison, axes=None, title=None):
@@ -51,4 +51,47 @@ def plot_front_tracks(comparison, axes=None, title=None):
     ax.set_ylabel("max position error / smallest facet")
     if title:
         fig.suptitle(title)
+    return fig
+
+
+def plot_coarsening(comparison, ax=None, title=None):
+    """Front positions through a whole coarsening: DAE (solid) and front ODE (dashed).
+
+    Parameters
+    ----------
+    comparison : CoarseningComparison
+        From :func:`qsa.paper.compare_coarsening`: positions of the fronts at the
+        hand-over (drift removed) against ``t``, log scale from the hand-over on;
+        the events are marked (DAE: grey lines, ODE: dotted).
+    ax : Axes, optional
+    title : str, optional
+
+    Returns
+    -------
+    Figure
+    """
+    c = comparison
+    if ax is None:
+        fig, ax = new_figure(size=(7.0, 4.5))
+    else:
+        fig = ax.figure
+    t0 = c.handover_time
+    x_dae = np.maximum(c.t_dae - t0, 1e-12)
+    x_ode = np.maximum(c.t_ode - t0, 1e-12)
+    for i in range(c.dae_positions.shape[1]):
+        color = f"C{i % 10}"
+        ax.plot(x_dae, c.dae_positions[:, i], "-", color=color, lw=1.6,
+                label="DAE" if i == 0 else None)
+        ax.plot(x_ode, c.ode_positions[:, i], "--", color="k", lw=0.9,
+                label="front ODE" if i == 0 else None)
+    for events, style in ((c.dae_events, "-"), (c.ode_events, ":")):
+        for e in events:
+            ax.axvline(e.time - t0, color="0.6", ls=style, lw=0.8)
+    ax.set_xscale("log")
+    ax.set_xlim(left=max(1e-3 * (c.t_final - t0), x_dae[1] if x_dae.size > 1 else 1e-9))
+    ax.set_xlabel(f"t - {t0:.3g} (time since the hand-over)")
+    ax.set_ylabel("front position (drift removed)")
+    ax.legend(fontsize=7, loc="best")
+    if title:
+        ax.set_title(title)
     return fig

@@ -174,7 +174,7 @@ def facet_figures(run):
     N = int(sc.N)
     Y = np.asarray(run.snap_states)
     xs, ys, ks = Y[:, :N], Y[:, N : 2 * N], Y[:, 2 * N : 3 * N]
-    times = _reached(sc.figure_times, run.snap_t, run.t_reached)
+    times = _reached(sc.physical_figure_times, run.snap_t, run.t_reached)
     events = [e.t for e in run.coarsening.events]
     panels = plot_facet_panels(run.snap_t, xs, ys, ks, times, kstar=sc.kstar)
     panels.suptitle(f"faceting coarsening: alpha={sc.alpha:g}, beta={sc.beta:g}, "

@@ -6,7 +6,10 @@ The front-position ODE ``p' = F(p)`` on the manifold of heteroclinic splices
 manifold's fields (:mod:`qsa.reduction.manifold`, with the derivation of the metric),
 the optional slow-manifold correction of the force (:mod:`qsa.reduction.correction`),
 a numpy or compiled evaluation (:mod:`qsa.reduction.backends`) and the integration
-through collisions (:mod:`qsa.reduction.integrate`). Its validation against the DAE
+through collisions (:mod:`qsa.reduction.integrate`). :mod:`qsa.reduction.modes` writes
+the reduced eigenmodes as normal perturbations of the curve and pairs them with the
+full linearization's; :mod:`qsa.reduction.handover` starts the ODE from a curvature
+profile (a DAE state). Its validation against the DAE
 flow and the full linearization (``qsa reproduce fronts``) is :mod:`qsa.paper.fronts`;
 ``SCENARIOS``, ``compare_fronts`` and ``compare_eigenvalues`` stay importable from here
 as aliases.
@@ -23,6 +26,7 @@ from qsa.reduction.fronts import (
     track_flow,
     track_fronts,
 )
+from qsa.reduction.handover import HandOver, hand_over
 from qsa.reduction.integrate import (
     FrontODEResult,
     ODECollision,
@@ -31,12 +35,14 @@ from qsa.reduction.integrate import (
     collision_sensitivity,
 )
 from qsa.reduction.manifold import SpliceFields
+from qsa.reduction.modes import ModePairing, ReducedModes, pair_modes, reduced_modes
 from qsa.reduction.ode import FrontODE
 
 __all__ = ["CoarseningEvent", "Fronts", "FrontTracks", "detect_fronts", "track_flow",
            "track_fronts", "FrontODE", "FrontODEResult", "collision_distance",
            "collision_sensitivity", "SCENARIOS", "compare_fronts", "compare_eigenvalues",
-           "FrontEvaluation", "ODECollision", "ODESegment", "SpliceFields"]
+           "FrontEvaluation", "ODECollision", "ODESegment", "SpliceFields", "HandOver",
+           "hand_over", "ModePairing", "ReducedModes", "pair_modes", "reduced_modes"]
 
 #: aliases of qsa.paper, resolved on first use (qsa.paper imports this package)
 _PAPER_ALIASES = {"SCENARIOS": "qsa.paper.scenarios", "compare_fronts": "qsa.paper.fronts",

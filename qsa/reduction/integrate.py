@@ -7,7 +7,9 @@ fronts collides, removes the pair, closes the remaining positions again and goes
 *Collisions.* When two neighbouring fronts come within ``d_c`` -- the spacing at which
 the superposed pair no longer crosses ``kstar / 2`` (:func:`collision_distance`,
 ``2 ln 3 / lambda`` for the quartic well) -- the splice manifold ends: the pair is
-removed, the remaining positions are closed again (minimum-norm Gauss-Newton,
+removed, its turning is given to the neighbouring corners (:func:`remove_pair`: the
+total turning is conserved and, as in the flow, stays where it was), the remaining
+positions are closed again (minimum-norm Gauss-Newton,
 :func:`qsa.equilibria.close_positions`) and the integration continues.
 
 *Validity.* The reduction neglects the slaving of the fast modes (the perimeter mode,
@@ -39,7 +41,8 @@ from scipy.optimize import brentq
 from qsa.equilibria.splice import close_positions, default_cutoff
 
 __all__ = ["FrontODEResult", "ODECollision", "ODESegment", "collision_distance",
-           "collision_sensitivity", "integrate_fronts", "STIFF_AUTO", "MESSAGES"]
+           "collision_sensitivity", "integrate_fronts", "remove_pair", "STIFF_AUTO",
+           "MESSAGES"]
 
 #: Meaning of :attr:`FrontODEResult.status` (0 success, positive: success with a caveat,
 #: negative: failure); :attr:`FrontODEResult.message` starts with the entry.
@@ -198,6 +201,67 @@ class FrontODEResult:
         return self.events[0] if self.events else None
 
 
+def remove_pair(p, ids, i, length, redistribute="local"):
+    """Positions after the pair ``(i, i + 1)`` (cyclically) annihilated.
+
+    The pair is removed. Its turning, ``kstar (p_{i+1} - p_i)`` on the splice when it
+    is a corner (an up-front followed by a down-front) and ``kstar`` times the
+    facet's length when it is a facet (the two corners then merge into one that
+    spans it), does not vanish: the total turning ``2 pi`` (e:C2) is conserved.
+    With ``redistribute="local"`` it stays where it was, as in the flow, whose
+    fast relaxation moves turning along the curve only over a few front widths: a
+    collapsed corner's turning is added to the two neighbouring corners (half each,
+    each lengthened about its centre), a merged corner is shortened about its centre
+    by the facet's length. ``"uniform"`` leaves the deficit to the closure that
+    follows (:func:`qsa.equilibria.close_positions`, minimum norm: spread over all
+    fronts). The closure conditions still have to be re-imposed afterwards.
+
+    Parameters
+    ----------
+    p : ndarray, shape (2N,)
+        Positions (up, down, up, ...), increasing, spanning less than ``length``.
+    ids : ndarray of int, shape (2N,)
+        Track indices.
+    i : int
+        The pair is ``(i, (i + 1) % 2N)``.
+    length : float
+    redistribute : {"local", "uniform"}
+
+    Returns
+    -------
+    q : ndarray, shape (2N - 2,)
+        Positions, again starting with an up-front.
+    qids : ndarray of int, shape (2N - 2,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p = np.array([0.0, 0.2, 0.5, 0.52, 1.0, 1.2])  # the corner (0.5, 0.52) collapses
+    >>> q, qids = remove_pair(p, np.arange(6), 2, 2.0)
+    >>> np.round(q, 3).tolist(), qids.tolist()
+    ([-0.005, 0.205, 0.995, 1.205], [0, 1, 4, 5])
+    """
+    n = p.size
+    j = (i + 1) % n
+    gap = (p[j] - p[i]) % length
+    P = np.asarray(p, dtype=float).copy()
+    if redistribute == "local":
+        if i % 2 == 0:  # a corner collapses: its neighbours (up, up + 1) take its turning
+            for up in ((i - 2) % n, (i + 2) % n):
+                P[up] -= 0.25 * gap
+                P[(up + 1) % n] += 0.25 * gap
+        else:  # a facet collapses: the merged corner (i - 1, j + 1) loses the facet's length
+            P[(i - 1) % n] += 0.5 * gap
+            P[(j + 1) % n] -= 0.5 * gap
+    keep = np.ones(n, dtype=bool)
+    keep[[i, j]] = False
+    q, qids = P[keep], np.asarray(ids)[keep]
+    if j == 0:  # the pair straddled s = 0: the first kept front is a down-front
+        q = np.append(q[1:], q[0] + length)
+        qids = np.append(qids[1:], qids[0])
+    return q, qids
+
+
 def _is_closed(ode, p, cut, L):
     """The compiled backend checks ``C`` on its own grid first: closing an already
     closed ``p`` (:func:`close_positions` on its finer grid) is then spared."""
@@ -208,7 +272,7 @@ def _is_closed(ode, p, cut, L):
 
 
 def integrate_fronts(ode, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method="auto",
-                     max_collisions=10, close=True):
+                     max_collisions=10, close=True, redistribute="local"):
     """Integrate ``p' = F(p)`` of ``ode`` from ``p0``, removing colliding pairs.
 
     Parameters
@@ -232,11 +296,17 @@ def integrate_fronts(ode, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method
     max_collisions : int
     close : bool
         Project ``p0`` and the positions after each collision onto ``C = 0``.
+    redistribute : {"local", "uniform"}
+        Where the turning of a removed pair goes (:func:`remove_pair`): to the
+        neighbouring corners (default), or wherever the minimum-norm closure puts it
+        (spread over all fronts).
 
     Returns
     -------
     FrontODEResult
     """
+    if redistribute not in ("local", "uniform"):
+        raise ValueError(f"redistribute must be 'local' or 'uniform', got {redistribute!r}")
     start = time.perf_counter()
     p = p0
     var = ode.beta is not None
@@ -321,12 +391,7 @@ def integrate_fronts(ode, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method
         j = (i + 1) % pc.size
         events.append(ODECollision(tc, (int(ids[i]), int(ids[j])), float(gaps[i]),
                                    pc.copy(), ids.copy()))
-        keep = np.ones(pc.size, dtype=bool)
-        keep[[i, j]] = False
-        q, qids = pc[keep], ids[keep]
-        if j == 0:  # the pair straddled s = 0: the first kept front is a down-front
-            q = np.append(q[1:], q[0] + L)
-            qids = np.append(qids[1:], qids[0])
+        q, qids = remove_pair(pc, ids, i, L, redistribute)
         if q.size < 4 or len(events) > max_collisions:
             status, message = 1, (f"{MESSAGES[1]} (collision at t={tc:.6g}, "
                                   f"{q.size} fronts left)")

@@ -351,7 +351,7 @@ class FrontODE:
         return f.positions
 
     def integrate(self, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method="auto",
-                  max_collisions=10, close=True):
+                  max_collisions=10, close=True, redistribute="local"):
         """Integrate ``p' = F(p)`` from ``p0``, removing colliding pairs.
 
         See :func:`qsa.reduction.integrate.integrate_fronts` for the parameters.
@@ -363,4 +363,4 @@ class FrontODE:
         if not (np.isfinite(t_final) and t_final > 0):
             raise ValueError(f"t_final must be positive, got {t_final!r}")
         return integrate_fronts(self, self._check(p0), t_final, t_eval, rtol, atol, method,
-                                max_collisions, close)
+                                max_collisions, close, redistribute)

@@ -33,11 +33,12 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from qsa._checks import real_number
-from qsa.curve import Curve
+from qsa.constraints import bind_constraints
+from qsa.curve import Curve, check_simple
 from qsa.discretize import FiniteDifference, Fourier
 from qsa.spectra.factored import FactoredNormalOperator
 from qsa.spectra.hessian import check_input, lagrange_hessian
-from qsa.spectra.kernel import build_kernel_report, kernel_size, rigid_normal_basis
+from qsa.spectra.kernel import build_kernel_report, constraint_bases, kernel_size
 from qsa.spectra.linearization import _check_gauge, linearization, scaled_operator
 from qsa.spectra.result import MESSAGES, KernelReport, Spectrum
 from qsa.spectra.solvers import (
@@ -88,6 +89,7 @@ def check_arguments(energy, curve, k, sigma, gauge, kernel_tol, drift_tol, facto
         Naming the bad argument.
     """
     check_input(energy, curve)
+    check_simple(curve)
     _check_gauge(gauge)
     if k is not None:
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
@@ -115,7 +117,7 @@ def check_arguments(energy, curve, k, sigma, gauge, kernel_tol, drift_tol, facto
 
 # --------------------------------------------------------------------- step 3: solve
 def solve(energy, curve: Curve, gauge, k=None, sigma=None, rtol=1e-5, lagrange=None,
-          vectors=True, deflate=True) -> EigenSolution:
+          vectors=True, deflate=True, constraints=None) -> EigenSolution:
     """Eigenpairs with error estimates in a gauge (the solve step of :func:`spectrum`).
 
     Parameters
@@ -134,23 +136,31 @@ def solve(energy, curve: Curve, gauge, k=None, sigma=None, rtol=1e-5, lagrange=N
     deflate : bool
         Normal gauge: deflate the rigid motions (exact at an equilibrium, where their
         normal components span an invariant subspace of ``J``).
+    constraints : sequence of Constraint, optional
+        Length / area constraints: the constrained linearization (their normal
+        variations excluded, :func:`~qsa.spectra.kernel.constraint_bases`). Taken from
+        ``lagrange`` when it is given.
 
     Returns
     -------
     EigenSolution
     """
-    LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
+    if lagrange is not None:
+        LH, cons = lagrange, lagrange.constraints
+    else:
+        cons = bind_constraints(constraints, curve)
+        LH = lagrange_hessian(energy, curve, constraints=cons)
     w = curve.dsigma
     if gauge == "normal":
         op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
-        rigid_basis = rigid_normal_basis(curve)
+        rigid_basis, cbasis = constraint_bases(curve, cons)
         basis, rigid = rigid_basis, None
         if not deflate:
             basis, rigid = np.zeros((0, curve.N)), op.ritz(rigid_basis)[0]
         if k is None:
-            return dense_normal(op, basis, rtol, vectors=vectors, rigid=rigid)
+            return dense_normal(op, basis, rtol, vectors=vectors, rigid=rigid, constrain=cbasis)
         sol = certified_eigenpairs(op, basis, k=k, sigma=0.0 if sigma is None else sigma,
-                                   rigid=rigid)
+                                   rigid=rigid, constrain=cbasis)
         order = np.argsort(-sol.values, kind="stable")
         return EigenSolution(sol.values[order], sol.vectors[:, order], sol.errors[order],
                              sol.is_kernel[order], sol.method)
@@ -326,7 +336,7 @@ def small_cluster(eigenvalues, n_kernel=0, floor=0.0, max_size=None):
 # -------------------------------------------------------------------------- driver
 def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel_tol=None,
              reject_spurious=None, drift_tol=1e-6, factor=1.5, equilibrium_tol=1e-6,
-             rtol=1e-5, deflate=None):
+             rtol=1e-5, deflate=None, constraints=None):
     """Eigenvalues and eigenvectors of the linearization at an equilibrium, with error bounds.
 
     Parameters
@@ -363,6 +373,15 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         their Ritz values as the kernel (normal gauge). Default: at an equilibrium
         (``max|V^n|`` within ``equilibrium_tol``), where they span an invariant subspace
         of ``J``; away from one they do not, and the whole spectrum of ``J`` is computed.
+    constraints : sequence of Constraint, optional
+        Length / area constraints (:mod:`qsa.constraints`; ``None`` targets: the curve's
+        values). The linearization of the constrained flow: ``L_Lambda`` with the
+        multiplier terms ``- mu_c nabla^2 c``, and in the normal gauge ``P J P`` on
+        ``T = {phi : <n_c, phi> = 0}`` (``n_L = kappa``, ``n_A = 1``; ``P`` the
+        ``<.,.>``-orthogonal projection onto ``T``). The directions ``n_c`` are excluded
+        from the problem (``N - m`` eigenvalues), not reported as eigenvalues; in the
+        other gauges the projection is applied to the normal velocity and they add
+        ``m`` kernel modes.
 
     Returns
     -------
@@ -371,7 +390,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     Raises
     ------
     ValueError
-        Bad ``energy``, ``curve``, ``gauge``, ``k``, ``sigma``, ``kernel_tol``,
+        Bad ``energy``, ``curve`` (also one that crosses or touches itself: the message
+        names the closest pair of nodes), ``gauge``, ``k``, ``sigma``, ``kernel_tol``,
         ``drift_tol``, ``factor`` or ``rtol``.
 
     Examples
@@ -391,7 +411,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     if check_reject is None:
         check_reject = isinstance(curve.grid, Fourier) and k is None
 
-    LH = lagrange_hessian(energy, curve)
+    cons = bind_constraints(constraints, curve)
+    LH = lagrange_hessian(energy, curve, constraints=cons)
     status, notes = 0, []
     if not LH.is_equilibrium(equilibrium_tol):
         status = 1
@@ -406,7 +427,7 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     if deflate is None:
         deflate = LH.is_equilibrium(equilibrium_tol)
     op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
-    basis = rigid_normal_basis(curve)
+    basis, cbasis = constraint_bases(curve, cons)
 
     try:
         sol = solve(energy, curve, gauge, k, sigma, rtol, lagrange=LH, deflate=bool(deflate))
@@ -430,7 +451,7 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotEquilibriumWarning)
             sol2 = solve(energy, curve.on_grid(grid2), gauge, k, sigma, rtol, vectors=False,
-                         deflate=bool(deflate))
+                         deflate=bool(deflate), constraints=cons)
         _, tol2 = kernel_size(sol2.values, sol2.errors, sol2.is_kernel)
         keep, drift = _drift_test(reported.values, sol2.values, drift_tol,
                                   atol=np.maximum(max(tol, tol2), reported.errors))
@@ -456,8 +477,9 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
                 f"{' ...' if unresolved.size > 6 else ''} (Spectrum.unresolved)")
         warnings.warn(text, UnresolvedEigenvalueWarning, stacklevel=2)
         notes.append(text)
-    expected = basis.shape[0] + {"comoving": curve.N, "paper": curve.N,
-                                 "scaled": 1}.get(gauge, 0)
+    mc = cbasis.shape[0]
+    expected = basis.shape[0] + {"comoving": curve.N + mc, "paper": curve.N + mc,
+                                 "scaled": 1 + mc}.get(gauge, 0)
     if n_kernel != expected and (k is None or n_kernel > expected):
         notes.append(f"{n_kernel} eigenvalues in the kernel, {expected} expected"
                      + (" (the 2N x 2N operator has spurious eigenvalues from under-resolved "
@@ -467,6 +489,9 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     msg = (f"{MESSAGES[status]}; {gauge} gauge, {method} [{reported.method}]: "
            f"{vals.size} eigenvalues, {n_unstable} unstable, "
            f"{n_kernel} in the kernel (|lambda| <= {tol:.2e})")
+    if cons:
+        msg += ("; constrained (" + ", ".join(f"fixed {con.symbol}" for con in cons)
+                + f"): {mc} normal direction(s) excluded")
     if check_reject:
         msg += f"; {spurious.size} rejected as spurious (N = {curve.N} vs {N2})"
     if notes:
@@ -486,7 +511,8 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         asymmetry=_asymmetry(op.H) if gauge == "normal" else np.nan,
         multipliers=LH.multipliers, projection_residual=LH.projection_residual,
         relative_residual=LH.relative_residual, rtol=rtol, success=status >= 0,
-        status=status, message=msg)
+        status=status, message=msg, constraints=cons,
+        constraint_multipliers=np.array(LH.constraint_multipliers, dtype=float))
 
 
 def _roundoff(op, iters=30):

@@ -247,9 +247,9 @@ class FactoredNormalOperator:
         return out / self.w[:, None]
 
     # ---------------------------------------------------------------- solves
-    def shift_invert(self, sigma=0.0, deflate=None) -> ShiftInvert:
+    def shift_invert(self, sigma=0.0, deflate=None, constrain=None) -> ShiftInvert:
         """The bordered factorization applying ``(W J - sigma W)^{-1}`` (see :class:`ShiftInvert`)."""
-        return ShiftInvert(self, float(sigma), deflate)
+        return ShiftInvert(self, float(sigma), deflate, constrain)
 
     def ritz(self, R):
         """Ritz values, vectors and errors of ``J`` on ``span R`` (rows ``<.,.>``-orthonormal).
@@ -371,10 +371,18 @@ class ShiftInvert:
 
     The ``3N`` system of the module docstring is factored once (sparse LU on finite
     differences, dense LU on Fourier grids); the low-rank part of ``H`` and the
-    deflation constraints ``R W phi = 0`` (with multipliers ``W R^T mu`` in the first
-    block row) are bordered on by block elimination. Every solve is followed by one
+    orthogonality rows -- the length / area constraints ``Rc W phi = 0`` and the
+    deflation ``R W phi = 0``, with multipliers ``W Rc^T mu_c + W R^T mu`` in the first
+    block row -- are bordered on by block elimination. Every solve is followed by one
     step of iterative refinement with the residual of the whole bordered system; the
     size of that correction estimates the forward error (:attr:`last_correction`).
+
+    The constraint rows make the solve that of the constrained operator: for ``b`` in
+    ``W T``, ``T = {phi : Rc W phi = 0}``, the solution ``phi`` is in ``T`` and
+    ``(P J P - sigma) phi = W^{-1} b`` with ``P`` the ``<.,.>``-orthogonal projection
+    onto ``T`` -- the linearization of the constrained gradient flow
+    (:mod:`qsa.constraints`). They stay in :meth:`solve_free`, which drops only the
+    deflation.
 
     Parameters
     ----------
@@ -382,6 +390,9 @@ class ShiftInvert:
     sigma : float
     deflate : ndarray, shape (m, N), optional
         Rows ``<.,.>``-orthonormal; the solution is kept orthogonal to them.
+    constrain : ndarray, shape (mc, N), optional
+        ``<.,.>``-orthonormal rows spanning the constraints' normal variations
+        (orthogonal to ``deflate``): the problem is posed on their complement.
 
     Examples
     --------
@@ -396,12 +407,14 @@ class ShiftInvert:
     True
     """
 
-    def __init__(self, op: FactoredNormalOperator, sigma: float, deflate=None):
+    def __init__(self, op: FactoredNormalOperator, sigma: float, deflate=None, constrain=None):
         self.op = op
         self.sigma = sigma
         N = op.N
         R = np.zeros((0, N)) if deflate is None else np.asarray(deflate, dtype=float)
-        self.R = R
+        Rc = (np.zeros((0, N)) if constrain is None
+              else np.asarray(constrain, dtype=float).reshape(-1, N))
+        self.R, self.Rc = R, Rc
         sparse = op.curve.grid.sparse
         w, gk, G, H = op.w, op.gk, op.G, op.H
         Hkk, Hkg = H[:N, :N], H[:N, N:]
@@ -423,7 +436,9 @@ class ShiftInvert:
                              [-Hkg * gk[None, :], -Hkk, I],
                              [-np.asarray(G), I, np.zeros((N, N))]])
         self._core = core
-        r, m = op.rank, R.shape[0]
+        r = op.rank
+        rows = np.vstack([Rc, R])  # constraints first: solve_free keeps them
+        m = rows.shape[0]
         n = core.shape[0]
         # border columns B1 (n, r + m), rows B2 (r + m, n), corner D
         B1 = np.zeros((n, r + m))
@@ -434,7 +449,7 @@ class ShiftInvert:
             B2[:r, :N] = -(op.V[N:] * gk[:, None]).T
             B2[:r, N:2 * N] = -op.V[:N].T
         if m:
-            WR = (R * w[None, :]).T
+            WR = (rows * w[None, :]).T
             B1[:N, r:] = WR
             B2[r:, :N] = WR.T
         D = np.zeros((r + m, r + m))
@@ -490,7 +505,7 @@ class ShiftInvert:
         return x[:N]
 
     def solve(self, b, refine=1, estimate=False):
-        """``phi`` with ``(W J - sigma W) phi + W R^T mu = b``, ``R W phi = 0``.
+        """``phi`` with ``(W J - sigma W) phi + W [Rc; R]^T mu = b``, ``[Rc; R] W phi = 0``.
 
         ``b`` has shape (N,) or (N, k) (columns solved together). ``refine`` steps of
         iterative refinement follow the block-elimination solve (the residual of the
@@ -503,8 +518,8 @@ class ShiftInvert:
         return self._refined(self._lu, self._B1.shape[1], b, refine, estimate)
 
     def solve_free(self, b, refine=1, estimate=False):
-        """As :meth:`solve`, with the same factors but without the deflation."""
-        r = self.op.rank
+        """As :meth:`solve`, with the same factors but without the deflation (constraints kept)."""
+        r = self.op.rank + self.Rc.shape[0]
         if self._free is None:
             self._free = self._lu.with_border(self._B1[:, :r], self._B2[:r], self._D[:r, :r])
         return self._refined(self._free, r, b, refine, estimate)
@@ -512,8 +527,9 @@ class ShiftInvert:
     def kernel_ritz(self, R):
         """Ritz values of ``J`` on ``span R`` from the inverse, with error estimates.
 
-        Rayleigh-Ritz for ``K = (W J - sigma W)^{-1} W`` (without the deflation) on the
-        span of the ``<.,.>``-orthonormal rows ``R``: ``K`` smooths, so the rounding noise
+        Rayleigh-Ritz for ``K = (W J - sigma W)^{-1} W`` (without the deflation; with the
+        constraints, ``R`` in their complement) on the span of the ``<.,.>``-orthonormal
+        rows ``R``: ``K`` smooths, so the rounding noise
         of the rigid fields (computed from the node positions) does not enter, as it
         does in the direct quadratic form (:meth:`FactoredNormalOperator.ritz`), whose
         error grows like ``eps^2 |J|``.

@@ -22,7 +22,7 @@ constrained critical point and is reported with every Hessian.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -35,6 +35,7 @@ from qsa.energies.constrained import (
     residual_scale,
 )
 from qsa.closure import closure_hessian
+from qsa.constraints import bind_constraints, project_velocity
 from qsa.geometry import constraint_gradients
 from qsa.linalg import ReducedHessian
 
@@ -168,6 +169,13 @@ class LagrangeHessian:
     residual_floor : float
         The round-off level of ``max|V^n|`` at this curve
         (:func:`qsa.energies.residual_floor`).
+    constraints : tuple of Constraint
+        Length / area constraints (:mod:`qsa.constraints`) whose multiplier terms
+        ``- mu_c nabla^2 c`` are in ``matrix``; then ``residual`` is ``max|V^n + mu . n|``
+        with the constrained flow's multipliers (:func:`qsa.constraints.flow_multipliers`)
+        and the projection is onto ``span(Psi, nabla_I c)``.
+    constraint_multipliers : ndarray, shape (m,)
+        ``mu_c`` of ``nabla_I E = Lambda . Psi + sum_c mu_c nabla_I c`` (projection).
 
     Parameters
     ----------
@@ -193,6 +201,8 @@ class LagrangeHessian:
     constraints_included: tuple
     message: str = ""
     residual_floor: float = 0.0
+    constraints: tuple = ()
+    constraint_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def is_equilibrium(self, tol=1e-6) -> bool:
         """``relative_residual <= tol``, or ``max|V^n|`` within 100 times its round-off floor.
@@ -208,15 +218,22 @@ class LagrangeHessian:
         return bool(self.relative_residual <= tol or self.residual <= 100 * self.residual_floor)
 
 
-def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessian:
+def lagrange_hessian(energy, curve: Curve, constraints=None, *, closure="auto") -> LagrangeHessian:
     """The Lagrangian Hessian ``L_Lambda = nabla_I^2 E - sum_j Lambda_j nabla_I^2 C_j``.
+
+    With length / area constraints, ``L = nabla_I^2 E - Lambda . nabla_I^2 C -
+    sum_c mu_c nabla_I^2 c``, the multipliers from the projection of ``nabla_I E`` onto
+    ``span(Psi, nabla_I c)``.
 
     Parameters
     ----------
     energy : Energy
     curve : Curve
-    constraints : {"auto", "all", "curvature"}
-        Which constraint Hessians to subtract. ``"all"``: all three.
+    constraints : sequence of Constraint, optional
+        E.g. ``[FixedLength(), FixedArea()]`` (:mod:`qsa.constraints`). A string is
+        read as ``closure`` (its former meaning).
+    closure : {"auto", "all", "curvature"}
+        Which closure Hessians to subtract. ``"all"``: all three.
         ``"curvature"``: only ``Lambda_3 nabla^2 C_3`` (sparse). ``"auto"`` (default):
         ``C_3`` always; ``C_1, C_2`` only when significant,
         ``|Lambda_j Psi_j| > max(|nabla_I E - Lambda . Psi|, 1e-8 |nabla_I E|)`` (else
@@ -249,24 +266,30 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     (True, True)
     """
     check_input(energy, curve)
-    if constraints not in ("auto", "all", "curvature"):
-        raise ValueError(f"constraints must be 'auto', 'all' or 'curvature', got {constraints!r}")
+    if isinstance(constraints, str):  # the former name of ``closure``
+        closure, constraints = constraints, None
+    if closure not in ("auto", "all", "curvature"):
+        raise ValueError(f"closure (formerly constraints=) must be 'auto', 'all' or 'curvature', "
+                         f"got {closure!r}")
+    cons = bind_constraints(constraints, curve)
     H = energy.hessian(curve)
     grad = energy.gradient(curve)
-    Lam = multipliers(energy, curve, gradient=grad)
+    Lam = multipliers(energy, curve, gradient=grad, constraints=cons)
+    Lam, mu = Lam[:3], Lam[3:]
     Psi = constraint_gradients(curve)
-    proj = Lam @ Psi
+    grads = [con.gradient(curve) for con in cons]
+    proj = Lam @ Psi + sum(m * gc for m, gc in zip(mu, grads, strict=True))
     res_abs = inner_norm(curve, grad - proj)
     denom = max(inner_norm(curve, grad), inner_norm(curve, proj))
     res_rel = res_abs / denom if denom > 0 else 0.0
-    Vn = normal_velocity(energy, curve)
+    Vn = project_velocity(cons, curve, normal_velocity(energy, curve))
     vres = float(np.max(np.abs(Vn)))
     vrel = vres / residual_scale(energy, curve)
     vfloor = residual_floor(energy, curve)
 
     floor = max(res_abs, 1e-8 * inner_norm(curve, grad))
     significant = any(abs(Lam[j]) * inner_norm(curve, Psi[j]) > floor for j in range(2))
-    use12 = constraints == "all" or (constraints == "auto" and significant)
+    use12 = closure == "all" or (closure == "auto" and significant)
     weights = Lam.copy() if use12 else np.array([0.0, 0.0, Lam[2]])
     # dense C_1, C_2 Hessians where the energy Hessian is a matrix anyway (small grids);
     # factored where it is factored or the grid is large
@@ -275,12 +298,18 @@ def lagrange_hessian(energy, curve: Curve, constraints="auto") -> LagrangeHessia
     L = H
     if np.any(weights != 0.0):
         L = add_matrices(H, -closure_hessian(curve, weights, "dense" if dense else "auto"))
+    for con, m in zip(cons, mu, strict=True):
+        if m != 0.0:
+            L = add_matrices(L, -m * con.hessian(curve))
     included = (use12, use12, True)
-    msg = (f"Lambda = {np.array2string(Lam, precision=6)}; projection residual "
+    msg = (f"Lambda = {np.array2string(Lam, precision=6)}; "
+           + "".join(f"mu_{con.symbol} = {m:.6g}; " for con, m in zip(cons, mu, strict=True))
+           + f"projection residual "
            f"{res_abs:.2e} ({res_rel:.1e} relative); max|V^n| = {vres:.2e} "
            f"({vrel:.1e} of the largest term, {vres / max(vfloor, 1e-300):.1e} times its "
            "round-off floor)")
     if not use12:
         msg += (f"; Lambda_1,2 terms omitted (|Lambda_1,2| = {np.abs(Lam[:2]).max():.1e}, "
                 "below the projection's accuracy)")
-    return LagrangeHessian(L, H, Lam, res_abs, res_rel, vres, vrel, included, msg, vfloor)
+    return LagrangeHessian(L, H, Lam, res_abs, res_rel, vres, vrel, included, msg, vfloor,
+                           cons, mu)

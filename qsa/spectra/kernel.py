@@ -1,8 +1,12 @@
 """The kernel of the linearization: rigid motions, the exact kernel relations, their residuals.
 
 At a constrained equilibrium (e:Abs-CP) the Lagrangian Hessian ``L_Lambda`` kills
-``(nabla_s kappa, 0)`` and every reparameterization mode ``M(0, v)`` (e:Hessian_Kernel,
-with the multiplier term), ``M`` kills the rigid motions (lem:kerM), ``M-dagger`` kills
+``(nabla_s kappa, 0)`` and maps every reparameterization mode ``M(0, v)`` into
+``span Psi`` (e:Hessian_Kernel, with the multiplier term: zero when every term of the
+Lagrangian is reparameterization invariant off the closed manifold too, as the local
+energies and ``C_3`` are; the enclosed area, and ``C_1, C_2``, are invariant only on it,
+which leaves a multiple of ``Psi`` that ``M-dagger`` removes), ``M`` kills the rigid
+motions (lem:kerM), ``M-dagger`` kills
 the constraint gradients ``Psi_j``, and the normal components of the rigid motions span
 the kernel of ``J``. :func:`kernel_report` measures each relation; the kernel of ``J`` is
 counted from eigenvalues with error estimates: the deflated rigid modes (their Ritz
@@ -15,14 +19,15 @@ import numpy as np
 
 from qsa import geometry
 from qsa._checks import real_number
+from qsa.constraints import bind_constraints, normal_basis
 from qsa.curve import Curve
 from qsa.spectra.factored import FactoredNormalOperator
 from qsa.spectra.hessian import check_input, inner_norm, lagrange_hessian
 from qsa.spectra.result import KernelReport
 from qsa.spectra.solvers import certified_eigenpairs
 
-__all__ = ["kernel_report", "operator_norm", "rigid_normal_basis", "kernel_size",
-           "EQUILIBRIUM_TOL"]
+__all__ = ["kernel_report", "operator_norm", "rigid_normal_basis", "constraint_bases",
+           "kernel_size", "EQUILIBRIUM_TOL"]
 
 #: Relative residual (``max|V^n|`` over its largest term) below which a curve counts as an
 #: equilibrium, so that the rigid motions are deflated from ``J``.
@@ -104,6 +109,48 @@ def rigid_normal_basis(curve: Curve, rtol=1e-8) -> np.ndarray:
     return (U[:, :r] / rw[:, None]).T
 
 
+def constraint_bases(curve: Curve, constraints=()):
+    """``(R, Rc)``: the rigid normal basis within the constraints' complement, and theirs.
+
+    ``Rc`` is a ``<.,.>``-orthonormal basis of the constraints' normal variations
+    ``n_c`` (``kappa`` for a length, ``1`` for an area; :mod:`qsa.constraints`), the
+    directions the constrained flow cannot move in; ``R`` is
+    :func:`rigid_normal_basis` with its components along ``Rc`` removed (they vanish
+    in the continuum: ``int n dsigma = int kappa n dsigma = 0`` and likewise for
+    ``gamma . tau``), re-orthonormalised, so that ``R`` lies in ``T = Rc^perp``.
+
+    Parameters
+    ----------
+    curve : Curve
+    constraints : sequence of Constraint
+
+    Returns
+    -------
+    R : ndarray, shape (m, N)
+    Rc : ndarray, shape (mc, N)
+        ``mc`` = number of independent normals (a circle with both a length and an area
+        constraint has one: ``kappa`` is constant).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from qsa import Curve, Fourier
+    >>> from qsa.constraints import FixedArea, FixedLength
+    >>> c = Curve.circle(1.0, Fourier(17))
+    >>> R, Rc = constraint_bases(c, [FixedLength(), FixedArea()])
+    >>> R.shape, Rc.shape
+    ((2, 17), (1, 17))
+    """
+    R = rigid_normal_basis(curve)
+    Rc = normal_basis(tuple(constraints), curve)
+    if Rc.shape[0] == 0:
+        return R, Rc
+    rw = np.sqrt(curve.dsigma)
+    R = R - (R * curve.dsigma) @ Rc.T @ Rc
+    Q, _ = np.linalg.qr((R * rw).T)
+    return (Q / rw[:, None]).T, Rc
+
+
 def kernel_size(values, errors, is_kernel):
     """``(n_kernel, kernel_tol)`` of eigenvalues with errors and the deflated rigid modes.
 
@@ -140,6 +187,17 @@ def _rel(curve, A, x, normA):
     if nx == 0 or normA == 0:
         return 0.0
     return inner_norm(curve, A @ x) / (normA * nx)
+
+
+def _modulo_closure(curve, A, x, normA, B):
+    """``|A x|`` relative, less its ``<.,.>``-projection on ``span B`` (rows of ``B``)."""
+    nx = inner_norm(curve, x)
+    if nx == 0 or normA == 0:
+        return 0.0
+    y = A @ x
+    w = np.concatenate([curve.dsigma, curve.dsigma])
+    coef = np.linalg.lstsq((B * w) @ B.T, (B * w) @ y, rcond=1e-12)[0]
+    return inner_norm(curve, y - coef @ B) / (normA * nx)
 
 
 def _smooth_random(curve: Curve, modes=8, seed=1):
@@ -179,7 +237,9 @@ def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol) -> KernelRep
     Psi = geometry.constraint_gradients(curve)
     psi = np.array([_rel(curve, Md, p, normM) for p in Psi])
     v = _smooth_random(curve)
-    rep = _rel(curve, L, geometry.reparameterization_mode(curve, v), normL)
+    rep = _modulo_closure(curve, L, geometry.reparameterization_mode(curve, v), normL,
+                          np.vstack([Psi] + [con.gradient(curve)[None, :]
+                                             for con in LH.constraints]))
     rigid_normal = np.zeros(3)
     for j, phi in enumerate(basis):
         rigid_normal[j] = inner_norm(curve, op.matvec(phi))
@@ -201,10 +261,12 @@ def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol) -> KernelRep
                      f"kernel_tol = {kernel_tol:.2e}")
     return KernelReport(lag, en, pred, rigid, psi, rep, rigid_normal, n_kernel, m,
                         float(kernel_tol), LH.multipliers, LH.projection_residual,
-                        LH.relative_projection_residual, LH.relative_residual, tuple(notes))
+                        LH.relative_projection_residual, LH.relative_residual, tuple(notes),
+                        np.array(LH.constraint_multipliers, dtype=float))
 
 
-def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> KernelReport:
+def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None,
+                  constraints=None) -> KernelReport:
     """Residual norms of the exact kernel relations, and the kernel dimension of ``J``.
 
     Parameters
@@ -218,6 +280,10 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
         being the rigid modes and any eigenvalue indistinguishable from them.
     kernel_tol : float, optional
         Threshold for ``eigenvalues``; default: the rigid modes' level.
+    constraints : sequence of Constraint, optional
+        Length / area constraints (:mod:`qsa.constraints`): the Lagrangian Hessian has
+        their multiplier terms and the kernel is that of the constrained operator
+        ``P J P`` on their complement (their normal variations are excluded).
 
     Returns
     -------
@@ -232,17 +298,19 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None) -> Ke
     (3, 3, True)
     """
     check_input(energy, curve)
-    LH = lagrange_hessian(energy, curve)
+    cons = bind_constraints(constraints, curve)
+    LH = lagrange_hessian(energy, curve, constraints=cons)
     op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
-    basis = rigid_normal_basis(curve)
+    basis, cbasis = constraint_bases(curve, cons)
     m = basis.shape[0]
     if eigenvalues is None:
         # deflation is exact at an equilibrium only; elsewhere count from J's own spectrum
+        k = min(m + 6, curve.N - 1 - cbasis.shape[0])
         if LH.is_equilibrium(EQUILIBRIUM_TOL):
-            sol = certified_eigenpairs(op, basis, k=min(m + 6, curve.N - 1), sigma=0.0)
+            sol = certified_eigenpairs(op, basis, k=k, sigma=0.0, constrain=cbasis)
         else:
-            sol = certified_eigenpairs(op, np.zeros((0, curve.N)), k=min(m + 6, curve.N - 1),
-                                       sigma=0.0, rigid=op.ritz(basis)[0])
+            sol = certified_eigenpairs(op, np.zeros((0, curve.N)), k=k, sigma=0.0,
+                                       rigid=op.ritz(basis)[0], constrain=cbasis)
         n_kernel, tol = kernel_size(sol.values, sol.errors, sol.is_kernel)
         if kernel_tol is not None:
             tol = real_number(kernel_tol, "kernel_tol", positive=True)

@@ -22,6 +22,18 @@ Four gauges (Conventions and errata, section 4; e:FOE-Lin, e:Meq, e:CVE):
     reparameterization modes ``M(0, v)`` (mean-zero ``v``) that keeps ``g``
     constant. Needs a curve with constant ``g``.
 
+Constraints
+-----------
+With length / area constraints (``constraints=[FixedLength(), FixedArea()]``,
+:mod:`qsa.constraints`) the Lagrangian Hessian carries their multiplier terms and the
+constrained flow's normal velocity is ``P V^n``, ``P`` the ``<.,.>``-orthogonal
+projection onto ``T = {phi : <n_c, phi> = 0}`` (``n_L = kappa``, ``n_A = 1``). So the
+normal gauge is ``P J P`` (self-adjoint; ``span n_c`` in its kernel), the comoving
+gauge ``-M diag(P, I) M-dagger L`` (``M`` of the projected extrinsic velocity; its
+non-zero spectrum is that of ``P J P`` on ``T``) and the scaled gauge projects ``dV``
+the same way. With ``R`` the rows of :func:`qsa.constraints.normal_basis`,
+``P = I - R^T R W``.
+
 Discrete form: with ``W = diag(dsigma)``, ``W2 = diag(dsigma, dsigma)`` and
 ``M1 = M[:, :N]`` (the normal columns of ``M``),
 ``J = -W^{-1} M1^T (W2 L_Lambda) M1``; ``W2 L_Lambda`` is symmetric, so ``W J`` is
@@ -35,11 +47,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from qsa import geometry
+from qsa.constraints import bind_constraints, normal_basis
 from qsa.curve import Curve
+from qsa.energies.base import add_matrices
 from qsa.linalg import SparsePlusLowRank
 from qsa.spectra.hessian import LagrangeHessian, check_input, lagrange_hessian
 
-__all__ = ["linearization", "normal_operator", "scaled_operator", "symmetric_form", "GAUGES"]
+__all__ = ["linearization", "normal_operator", "scaled_operator", "symmetric_form",
+           "project_operator", "GAUGES"]
 
 #: The gauges accepted by :func:`linearization` and :func:`qsa.spectra.spectrum`.
 GAUGES = ("comoving", "paper", "normal", "scaled")
@@ -72,7 +87,56 @@ def _symmetrize(A):
     return 0.5 * (A + A.T)
 
 
-def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None):
+def _lagrangian(energy, curve, lagrange, constraints):
+    """``(LagrangeHessian, constraints)``: the given one (with its constraints) or a new one."""
+    if lagrange is not None:
+        if not isinstance(lagrange, LagrangeHessian):
+            raise ValueError("lagrange must be a LagrangeHessian from "
+                             "qsa.spectra.lagrange_hessian")
+        return lagrange, lagrange.constraints
+    cons = bind_constraints(constraints, curve)
+    return lagrange_hessian(energy, curve, constraints=cons), cons
+
+
+def _projection_factors(curve, constraints):
+    """``(a, b)`` with ``P = I - a b^T`` the ``<.,.>``-projection onto ``T`` (None if none)."""
+    Rc = normal_basis(constraints, curve)
+    if Rc.shape[0] == 0:
+        return None
+    return Rc.T, curve.dsigma[:, None] * Rc.T
+
+
+def project_operator(J, a, b):
+    """``P J P`` with ``P = I - a b^T``, in the matrix type of ``J`` plus a low-rank part.
+
+    Parameters
+    ----------
+    J : matrix, shape (N, N)
+        Dense, sparse, :class:`~qsa.linalg.SparsePlusLowRank` or
+        :class:`~qsa.linalg.ReducedHessian`.
+    a, b : ndarray, shape (N, m)
+
+    Returns
+    -------
+    matrix, shape (N, N)
+        ``J + U V^T`` with ``U = [-a, -J a + a (b^T J a)]``, ``V = [J^T b, b]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> J = np.diag([1.0, 2.0, 3.0])
+    >>> a = b = np.array([[1.0], [1.0], [1.0]]) / np.sqrt(3)
+    >>> P = np.eye(3) - a @ b.T
+    >>> bool(np.allclose(project_operator(J, a, b), P @ J @ P))
+    True
+    """
+    Ja = J @ a
+    U = np.hstack([-a, -Ja + a @ (b.T @ Ja)])
+    V = np.hstack([J.T @ b, b])
+    return add_matrices(J, SparsePlusLowRank(sp.csr_matrix(J.shape), U, V))
+
+
+def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None, constraints=None):
     """``J = -[M-dagger L_Lambda M(., 0)]_1``, or its symmetric form ``W^{1/2} J W^{-1/2}``.
 
     Parameters
@@ -84,7 +148,10 @@ def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None):
         Euclidean inner product (exactly symmetrised, ``(S + S^T)/2``): same
         eigenvalues as ``J``, eigenvectors ``y = W^{1/2} phi``.
     lagrange : LagrangeHessian, optional
-        A precomputed :func:`~qsa.spectra.lagrange_hessian` of this curve.
+        A precomputed :func:`~qsa.spectra.lagrange_hessian` of this curve (its
+        constraints are used).
+    constraints : sequence of Constraint, optional
+        Length / area constraints: ``P J P`` (module docstring).
 
     Returns
     -------
@@ -106,8 +173,11 @@ def normal_operator(energy, curve: Curve, symmetric=False, lagrange=None):
     True
     """
     check_input(energy, curve)
-    LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
+    LH, cons = _lagrangian(energy, curve, lagrange, constraints)
     J = _normal_core(curve, LH.matrix)
+    ab = _projection_factors(curve, cons)
+    if ab is not None:
+        J = project_operator(J, *ab)
     return symmetric_form(curve, J) if symmetric else J
 
 
@@ -150,7 +220,7 @@ def symmetric_form(curve: Curve, J):
     return _symmetrize(_scale_rows_cols(J, rw, 1.0 / rw))
 
 
-def scaled_operator(energy, curve: Curve, lagrange=None) -> np.ndarray:
+def scaled_operator(energy, curve: Curve, lagrange=None, constraints=None) -> np.ndarray:
     """The scaled-arc-length linearization on ``x = (kappa1, g1)``, shape (N + 1, N + 1).
 
     ``g1`` is the (spatially constant) perturbation of ``g = L``. With
@@ -171,7 +241,10 @@ def scaled_operator(energy, curve: Curve, lagrange=None) -> np.ndarray:
     curve : Curve
         With constant ``g``.
     lagrange : LagrangeHessian, optional
-        A precomputed :func:`~qsa.spectra.lagrange_hessian` of this curve.
+        A precomputed :func:`~qsa.spectra.lagrange_hessian` of this curve (its
+        constraints are used).
+    constraints : sequence of Constraint, optional
+        Length / area constraints: ``dV`` is replaced by ``P dV`` (module docstring).
 
     Returns
     -------
@@ -193,7 +266,7 @@ def scaled_operator(energy, curve: Curve, lagrange=None) -> np.ndarray:
     if np.max(np.abs(g - g.mean())) > 1e-10 * g.mean():
         raise ValueError("curve: the scaled gauge needs constant g (scaled arc length); "
                          "reparameterize the curve first (e.g. qsa.equilibria.polish)")
-    LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
+    LH, cons = _lagrangian(energy, curve, lagrange, constraints)
     N = curve.N
     grid = curve.grid
     L = _dense(LH.matrix)
@@ -203,6 +276,9 @@ def scaled_operator(energy, curve: Curve, lagrange=None) -> np.ndarray:
     E[:N, :N] = np.eye(N)
     E[N:, N] = 1.0
     dV = -(Md1 @ (L @ E))
+    ab = _projection_factors(curve, cons)
+    if ab is not None:
+        dV = dV - ab[0] @ (ab[1].T @ dV)
     y = M1 @ dV
     yk, yg = y[:N], y[N:]
     c = grid.weights @ yg
@@ -220,7 +296,7 @@ def _dense(A):
     return np.asarray(A)
 
 
-def linearization(energy, curve: Curve, gauge="comoving", lagrange=None):
+def linearization(energy, curve: Curve, gauge="comoving", lagrange=None, constraints=None):
     """The linearized flow at ``curve`` in the requested gauge (see the module docstring).
 
     Parameters
@@ -235,7 +311,10 @@ def linearization(energy, curve: Curve, gauge="comoving", lagrange=None):
         ``"normal"``: ``J`` (N x N, dsigma-self-adjoint);
         ``"scaled"``: the constant-``g`` quotient (N + 1 x N + 1, dense).
     lagrange : LagrangeHessian, optional
-        Reuse a computed :func:`~qsa.spectra.lagrange_hessian`.
+        Reuse a computed :func:`~qsa.spectra.lagrange_hessian` (and its constraints).
+    constraints : sequence of Constraint, optional
+        Length / area constraints (:mod:`qsa.constraints`): the linearization of the
+        constrained flow (module docstring).
 
     Returns
     -------
@@ -254,15 +333,19 @@ def linearization(energy, curve: Curve, gauge="comoving", lagrange=None):
     """
     check_input(energy, curve)
     _check_gauge(gauge)
-    if lagrange is not None and not isinstance(lagrange, LagrangeHessian):
-        raise ValueError("lagrange must be a LagrangeHessian from qsa.spectra.lagrange_hessian")
+    LH, cons = _lagrangian(energy, curve, lagrange, constraints)
     if gauge == "normal":
-        return normal_operator(energy, curve, lagrange=lagrange)
+        return normal_operator(energy, curve, lagrange=LH)
     if gauge == "scaled":
-        return scaled_operator(energy, curve, lagrange=lagrange)
-    if gauge == "paper":
-        H = energy.hessian(curve)
-    else:
-        H = (lagrange if lagrange is not None else lagrange_hessian(energy, curve)).matrix
-    out = geometry.MMdagger(curve) @ H
-    return -out
+        return scaled_operator(energy, curve, lagrange=LH)
+    H = energy.hessian(curve) if gauge == "paper" else LH.matrix
+    out = -(geometry.MMdagger(curve) @ H)
+    ab = _projection_factors(curve, cons)
+    if ab is None:
+        return out
+    # -M diag(P, I) M-dagger H = out + M1 a (b^T [M-dagger H]_1)
+    N = curve.N
+    a, b = ab
+    M1a = geometry.M(curve)[:, :N] @ a
+    Md1b = geometry.M_adjoint(curve)[:N].T @ b  # (2N, m)
+    return add_matrices(out, SparsePlusLowRank(sp.csr_matrix(out.shape), M1a, H.T @ Md1b))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -43,7 +43,10 @@ class KernelReport:
         ``|M-dagger Psi_j| / (|M| |Psi_j|)`` (``ker M-dagger``).
     reparameterization : float
         ``|L_Lambda M(0, v)| / (|L_Lambda| |M(0, v)|)`` for a random smooth ``v``
-        (Fourier modes 1..8 with normal random coefficients, fixed seed).
+        (Fourier modes 1..8 with normal random coefficients, fixed seed), with the
+        part of ``L_Lambda M(0, v)`` in ``span(Psi, nabla_I c)`` removed: the area and
+        ``C_1, C_2`` are reparameterization invariant on the closed manifold only, so
+        their Hessians leave such a part, which ``M-dagger`` (the flow) removes.
     rigid_normal : ndarray, shape (3,)
         ``|J phi_j| / |phi_j|`` for an orthonormal basis of the normal components of
         the rigid motions (``phi_j`` in ``ker J``); the last is 0 if that span has
@@ -58,6 +61,8 @@ class KernelReport:
     projection_residual, relative_projection_residual, relative_residual : float
         See :class:`~qsa.spectra.hessian.LagrangeHessian`.
     notes : tuple of str
+    constraint_multipliers : ndarray, shape (m,)
+        Multipliers of the length / area constraints (empty without).
 
     Parameters
     ----------
@@ -89,6 +94,7 @@ class KernelReport:
     relative_projection_residual: float
     relative_residual: float
     notes: tuple = ()
+    constraint_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def summary(self) -> dict:
         """JSON-serialisable dict.
@@ -188,6 +194,11 @@ class Spectrum:
         A key of :data:`MESSAGES`: 0 ok, 1 not an equilibrium (warning issued),
         2 some eigenvalues unresolved (warning issued), -1 eigen-solver failure.
     message : str
+    constraints : tuple of Constraint
+        The length / area constraints of the constrained linearization (empty without):
+        the spectrum is that of ``P J P`` on the complement of their normal variations.
+    constraint_multipliers : ndarray, shape (m,)
+        Their multipliers ``mu_c``.
 
     Parameters
     ----------
@@ -235,6 +246,8 @@ class Spectrum:
     success: bool = True
     status: int = 0
     message: str = ""
+    constraints: tuple = ()
+    constraint_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __repr__(self):
         return (f"Spectrum(gauge={self.gauge!r}, method={self.method!r}, N={self.N}, "
@@ -289,4 +302,6 @@ class Spectrum:
             "relative_residual": self.relative_residual,
             "success": self.success, "status": self.status, "message": self.message,
             "kernel": self.kernel.summary(),
+            "constraints": [k.params() for k in self.constraints],
+            "constraint_multipliers": [float(m) for m in self.constraint_multipliers],
         }

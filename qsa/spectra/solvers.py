@@ -116,7 +116,7 @@ def _arpack(op, si, R, k, seed=0):
 
 
 def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0,
-                         rigid=None) -> EigenSolution:
+                         rigid=None, constrain=None) -> EigenSolution:
     """Eigenpairs of ``J`` nearest ``sigma`` from the factors, with error estimates.
 
     Parameters
@@ -132,6 +132,11 @@ def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0,
     rigid : ndarray, optional
         Estimates of the rigid modes' eigenvalues, kept away from the shift (default:
         the Ritz values on ``R``; pass them when ``R`` is empty, i.e. no deflation).
+    constrain : ndarray, shape (mc, N), optional
+        ``<.,.>``-orthonormal rows spanning the normal variations of length / area
+        constraints (orthogonal to ``R``): the eigenproblem is that of the constrained
+        operator ``P J P`` on their complement (:class:`~qsa.spectra.factored.ShiftInvert`);
+        these directions are excluded, not returned.
 
     Returns
     -------
@@ -140,19 +145,21 @@ def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0,
         ARPACK error when a solve fails.
     """
     N, m = op.N, R.shape[0]
+    Rc = np.zeros((0, N)) if constrain is None else np.asarray(constrain, float).reshape(-1, N)
+    rows = np.vstack([R, Rc])
     estimate = op.ritz(R)[0] if rigid is None else np.asarray(rigid, dtype=float)
-    si = _shift(op, sigma, R, np.append(estimate, 0.0))
+    si = _shift(op, sigma, R, np.append(estimate, 0.0), Rc)
     rvals, rvecs, rerr = si.kernel_ritz(R)
-    free = N - m
+    free = N - rows.shape[0]
     # a few more than asked: the shift may have moved, and the rigid Ritz values compete
     want = free if k is None else min(int(k) + 2, free - 1)
     if k is None or N <= DENSE_INVERSE_LIMIT or want >= free // 2:
-        vals, vecs = _dense_inverse(op, si, R)
+        vals, vecs = _dense_inverse(op, si, rows)
         order = np.argsort(np.abs(vals - sigma))[:want]
         vals, vecs = vals[order], vecs[:, order]
         method = "factored dense"
     else:
-        vals, vecs = _arpack(op, si, R, want)
+        vals, vecs = _arpack(op, si, rows, want)
         method = "factored shift-invert"
     vecs = vecs / np.sqrt(np.sum(op.w[:, None] * vecs**2, axis=0))
     err = si.errors(vals, vecs).total
@@ -184,7 +191,7 @@ def _slow_scale(op, R, modes=8, seed=1):
     return val if val > 0 else 1.0
 
 
-def _shift(op, sigma, R, rigid):
+def _shift(op, sigma, R, rigid, Rc=None):
     """The shift-invert factorization at a shift safely away from the rigid eigenvalues.
 
     The unbordered core is singular exactly when the shift is an eigenvalue of ``J``,
@@ -193,24 +200,28 @@ def _shift(op, sigma, R, rigid):
     eigenvalues found do not depend on the shift). A shift exactly on the spectrum
     elsewhere is moved off it.
     """
-    delta = 1e-8 * _slow_scale(op, R)
+    delta = 1e-8 * _slow_scale(op, R if Rc is None else np.vstack([R, Rc]))
     if rigid.size:
         j = int(np.argmin(np.abs(sigma - rigid)))
         if abs(sigma - rigid[j]) < delta:
             sigma = rigid[j] + 2 * delta * (1.0 if sigma >= rigid[j] else -1.0)
     try:
-        return op.shift_invert(sigma, deflate=R)
+        return op.shift_invert(sigma, deflate=R, constrain=Rc)
     except np.linalg.LinAlgError:
-        return op.shift_invert(sigma + delta, deflate=R)
+        return op.shift_invert(sigma + delta, deflate=R, constrain=Rc)
 
 
-def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True, rigid=None) -> EigenSolution:
+def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True, rigid=None,
+                 constrain=None) -> EigenSolution:
     """Every eigenvalue of ``J``: the formed symmetric matrix, then the factors near 0.
 
     The formed ``S = W^{1/2} J W^{-1/2}`` gives all eigenvalues with absolute error
     ``eps |J|``; those with ``eps |J| > rtol |lambda|`` (a ball around 0, the rigid
     modes included) are replaced by :func:`certified_eigenpairs` nearest 0 (at most
     :data:`MAX_CERTIFIED`; any left over keep the dense error and fail the test).
+    With ``constrain`` rows (see :func:`certified_eigenpairs`), ``W J`` is compressed to
+    the ``<.,.>``-orthonormal basis ``Q`` of their complement: ``Q^T W J Q``, the
+    constrained operator ``P J P`` on it.
 
     Returns
     -------
@@ -220,11 +231,17 @@ def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True, rigid=None) 
     curve = op.curve
     rw = np.sqrt(op.w)
     J = op.form()
-    S = to_dense(J) * rw[:, None] / rw[None, :]
+    Rc = np.zeros((0, op.N)) if constrain is None else np.asarray(constrain, float)
+    if Rc.shape[0]:
+        Q = _complement_basis(curve, Rc)  # <.,.>-orthonormal columns
+        S = Q.T @ (op.w[:, None] * to_dense(J @ Q))
+    else:
+        Q = np.diag(1.0 / rw)
+        S = to_dense(J) * rw[:, None] / rw[None, :]
     S = 0.5 * (S + S.T)
     if vectors:
         lam, Y = sla.eigh(S)
-        vecs = Y / rw[:, None]
+        vecs = Q @ Y
     else:
         lam, vecs = sla.eigvalsh(S), None
     normJ = float(np.max(np.abs(lam))) if lam.size else 0.0
@@ -235,7 +252,7 @@ def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True, rigid=None) 
     m = R.shape[0]
     if n_bad:
         k = _window(np.abs(lam), max(n_bad, m) + 2, MAX_CERTIFIED + m)
-        cert = certified_eigenpairs(op, R, k=k, sigma=0.0, rigid=rigid)
+        cert = certified_eigenpairs(op, R, k=k, sigma=0.0, rigid=rigid, constrain=Rc)
         drop = np.argsort(np.abs(lam), kind="stable")[: cert.values.size]
         keep = np.ones(lam.size, bool)
         keep[drop] = False

@@ -23,7 +23,11 @@ critical plane of a double eigenvalue into reflection-even and -odd directions
 (branch switching).
 
 The rigid motions' normal components lie in sectors ``0`` (rotation) and ``+-1``
-(translations); they are deflated sector by sector and reported as the kernel.
+(translations); they are deflated sector by sector and reported as the kernel. Length
+and area constraints (:mod:`qsa.constraints`) pose the problem on the complement of their
+normal variations (``kappa``, ``1``: shift-invariant, so in sector 0), the operator being
+``P J P`` with the constrained Lagrangian Hessian; those directions are excluded, not
+reported.
 """
 
 from __future__ import annotations
@@ -33,10 +37,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from qsa.constraints import bind_constraints
 from qsa.curve import Curve
 from qsa.spectra.factored import FactoredNormalOperator
 from qsa.spectra.hessian import check_input, lagrange_hessian
-from qsa.spectra.kernel import rigid_normal_basis
+from qsa.spectra.kernel import constraint_bases
 from qsa.spectra.solvers import _shift
 
 __all__ = ["BlochSymmetry", "SectorSpectrum", "detect_symmetry", "sector_basis",
@@ -320,7 +325,7 @@ def _real_parts(vecs, w):
 
 
 def sector_spectrum(energy, curve: Curve, symmetry=None, k=None, sigma=0.0, sectors=None,
-                    lagrange=None, deflate=None) -> SectorSpectrum:
+                    lagrange=None, constraints=None) -> SectorSpectrum:
     """Eigenvalues of ``J`` per Bloch sector from the factored operator (see the module docstring).
 
     Parameters
@@ -338,9 +343,9 @@ def sector_spectrum(energy, curve: Curve, symmetry=None, k=None, sigma=0.0, sect
     sectors : sequence of int, optional
         Bloch indices to compute (default all, ``0..floor(n/2)``).
     lagrange : LagrangeHessian, optional
-    deflate : ndarray, shape (m, N), optional
-        ``<.,.>``-orthonormal rows to deflate (default the rigid motions' normal
-        components).
+        Of ``energy`` at ``curve`` with the same ``constraints``.
+    constraints : sequence of Constraint, optional
+        Length / area constraints: the spectrum is that of the constrained operator.
 
     Returns
     -------
@@ -377,16 +382,17 @@ def sector_spectrum(energy, curve: Curve, symmetry=None, k=None, sigma=0.0, sect
                          "(eigenvalues per sector nearest sigma)")
     if k is not None and (isinstance(k, bool) or int(k) != k or k < 1):
         raise ValueError(f"k must be a positive integer, got {k!r}")
-    LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve)
+    cons = bind_constraints(constraints, curve)
+    LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve, constraints=cons)
     op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
-    R = rigid_normal_basis(curve) if deflate is None else np.asarray(deflate, dtype=float)
+    R, Rc = constraint_bases(curve, cons)
     w = curve.dsigma
-    si = _shift(op, float(sigma), R, np.append(op.ritz(R)[0], 0.0))
+    si = _shift(op, float(sigma), R, np.append(op.ritz(R)[0], 0.0), Rc)
     kvals, _, kerr = si.kernel_ritz(R)
     vals, vecs, secs = [], [], []
     complete = True
     for b in todo:
-        B = _deflated_basis(sector_basis(sym, b, w), R, w)
+        B = _deflated_basis(sector_basis(sym, b, w), np.vstack([R, Rc]), w)
         if B.shape[1] == 0:
             continue
         if k is None or (B.shape[1] <= DENSE_SECTOR_LIMIT and k >= B.shape[1] // 2):

@@ -43,8 +43,20 @@ def test_text_output_lists_the_bifurcations(capsys):
 
 @pytest.mark.parametrize("extra, match", [(["--switch", "7"], "there are 2 bifurcations"),
                                           (["--switch", "x"], "indices"),
-                                          (["--stop", "0.0", "--radius", "-1"], "R")])
+                                          (["--stop", "0.0", "--radius", "-1"], "radius")])
 def test_bad_input_is_one_line_and_exit_2(extra, match, capsys):
     assert main(ARGS + extra) == 2
     err = capsys.readouterr().err
     assert match in err and err.count("\n") == 1
+
+
+def test_the_pressurized_ring(capsys):
+    code = main(["bifurcate", "ring", "--N", "33", "--stop", "-9", "--json"])
+    assert code == 0
+    out = json.loads(capsys.readouterr().out)
+    (ring,) = out["branches"]
+    bifs = ring["bifurcations"]
+    assert [b["sector"] for b in bifs] == [2, 3]
+    assert [b["parameter"] for b in bifs] == pytest.approx([-3.0, -8.0], rel=1e-8)
+    assert out["equilibrium"] is None
+    assert main(["bifurcate", "ring", "--eps", "-1", "--stop", "-9"]) == 2

@@ -8,7 +8,9 @@ import pytest
 
 from qsa.cli import main
 from qsa.io import load_npz
-from qsa.paper import CONVERGENCE
+from tests.reference import load
+
+PAPER = load("paper_appendix")
 
 
 def test_flow_cha_writes_data_figure_and_resumes(tmp_path, capsys):
@@ -52,14 +54,14 @@ def test_reproduce_timesteps_fast_variant(capsys):
     assert main(["reproduce", "timesteps", "--tols", "1e-2", "1e-3", "--N", "32",
                  "--t-final", "0.02", "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
-    assert s["be"]["0.001"]["steps"] > s["be"]["0.01"]["steps"]
-    assert s["bdf2"]["0.001"]["steps"] < s["be"]["0.001"]["steps"]
+    assert s["be"]["0.001"]["n_steps"] > s["be"]["0.01"]["n_steps"]
+    assert s["bdf2"]["0.001"]["n_steps"] < s["be"]["0.001"]["n_steps"]
 
 
 # --------------------------------------------------------- the paper's runs
 @pytest.mark.slow
 def test_reproduce_convergence_matches_the_paper(capsys):
-    paper = CONVERGENCE.paper_differences
+    paper = PAPER["table_t1"]
     assert main(["reproduce", "convergence", "--normal", "centred", "--json"]) == 0
     s = json.loads(capsys.readouterr().out)["results"]["centred"]
     paper_ratio = {N: paper[N // 2] / paper[N] for N in paper if N // 2 in paper}
@@ -76,9 +78,9 @@ def test_reproduce_convergence_matches_the_paper(capsys):
 
 @pytest.mark.slow
 def test_reproduce_timesteps_matches_the_paper(capsys):
-    paper = CONVERGENCE.paper_steps
+    paper = PAPER["time_steps"]
     assert main(["reproduce", "timesteps", "--no-bdf2", "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
     for tol, steps in paper.items():
-        assert abs(s["be"][f"{tol:g}"]["steps"] / steps - 1) <= 0.15
+        assert abs(s["be"][f"{tol:g}"]["n_steps"] / steps - 1) <= 0.15
     assert abs(s["growth_per_decade"]["be"] / np.sqrt(10) - 1) <= 0.2

@@ -84,7 +84,8 @@ def test_three_pulse_branch_fold_matches_semi_analytic():
         bracket=(0.06, 0.09, 0.12), tol=1e-10)
     eq = npulse(3, alpha, grid=Fourier(129), kstar=K, beta=BETA)
     Ls0 = eq.params["L_star"]
-    b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02), max_steps=20)
+    b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02), max_steps=20,
+                     stability=False)
     assert b.success, b.message
     assert len(b.folds) == 1
     assert b.folds[0].param == pytest.approx(res.fun, abs=1e-9)
@@ -105,7 +106,7 @@ def test_fd_fold_converges_at_order_two():
         eq = npulse(3, alpha, grid=FiniteDifference(N), kstar=K, beta=BETA)
         Ls0 = eq.params["L_star"]
         b = continuation(factory(alpha), eq.curve, "L_star", (Ls0, Ls0 - 0.2, -0.02),
-                         max_steps=20)
+                         max_steps=20, stability=False)
         assert len(b.folds) == 1
         errs.append(abs(b.folds[0].param - ref))
     assert np.log2(errs[0] / errs[1]) == pytest.approx(2.0, abs=0.15)
@@ -167,3 +168,44 @@ def test_bad_input():
         continuation(factory(), eq.curve, "L_star", (4.0, 3.0, -0.1), stability="yes")
     with pytest.raises(ValueError, match="not close enough"):
         continuation(factory(), eq.curve, "L_star", (1.0, 3.0, 0.1), maxiter=0)
+
+
+# ---------------------------------------------------- a second-order energy in eta
+def _functionalized_pulse_branch(method, values):
+    """3-pulses of FunctionalizedCurvature + Perimeter in eta, from the faceting pulse (an
+    exact equilibrium at eta = 1 for L* = L + nu2 / beta); off the faceting family for
+    eta != 1. The relative residual's round-off floor is ~1e-10 here (sixth order)."""
+    from qsa.energies import FunctionalizedCurvature
+
+    eq = npulse(3, 0.2, kstar=K, grid=Fourier(81))
+    L_star = eq.params["L"] + eq.params["nu2"] / BETA
+
+    def fc(eta):
+        return FunctionalizedCurvature(0.2, eta, K) + Perimeter(BETA, L_star)
+
+    return fc, eq, continuation(fc, eq.curve, "eta", values, method=method)
+
+
+@pytest.mark.parametrize("method", ["pseudo-arclength", "natural"])
+def test_functionalized_npulse_branch_in_eta(method):
+    from qsa.equilibria import polish
+
+    values = (1.0, 1.6, 0.15) if method == "pseudo-arclength" else np.linspace(1.0, 1.6, 5)
+    fc, eq, b = _functionalized_pulse_branch(method, values)
+    assert b.success and b.status == 0, b.message
+    assert_status_convention(b, MESSAGES)
+    ps = np.array([pt.param for pt in b.points])
+    assert ps[0] == 1.0 and ps[-1] >= 1.6 - 1e-12 and len(b.points) >= 4
+    assert not b.bifurcations and not b.folds
+    for pt in b.points:
+        e = pt.equilibrium
+        assert e.success and e.residual <= 1e-8 * e.residual_scale
+        assert pt.n_unstable == 0
+        assert e.params["eta"] == pytest.approx(pt.param, rel=1e-14)
+    # at eta = 1 the faceting pulse (Lambda_3 = 0); beyond, Lambda_3 moves off 0 monotonically
+    lam3 = np.array([pt.equilibrium.multipliers[2] for pt in b.points])
+    assert abs(lam3[0]) < 1e-8 and np.all(np.diff(lam3) < 0)
+    # a point of the branch is the equilibrium polish finds from the faceting guess
+    direct = polish(fc(ps[2]), eq.curve)
+    assert direct.success
+    assert abs(direct.curve.length() - b.points[2].equilibrium.curve.length()) < 1e-9

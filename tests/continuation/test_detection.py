@@ -56,7 +56,7 @@ def test_the_faceting_circle_from_R1_to_R09_does_not_raise_and_finds_every_cross
     modes = [m for m in range(2, 17) if crossing_curvature(m) < b.points[-1].curve.kappa[0]]
     assert modes[:5] == [2, 3, 4, 5, 6] and b.points[-1].curve.kappa[0] > 1 / 0.9
     assert [x.sector for x in b.bifurcations] == modes
-    for x, m in zip(b.bifurcations, modes):
+    for x, m in zip(b.bifurcations, modes[:5], strict=False):
         kc = crossing_curvature(m)
         assert x.kind == "branch" and x.multiplicity == 2 and x.change == 2
         assert [md.sector for md in x.modes] == [m, m]
@@ -150,3 +150,45 @@ def test_numerical_trouble_is_a_status_not_an_exception():
         assert not b.success and b.status == -5 and "injected failure" in b.message
         assert_status_convention(b, MESSAGES)
         assert b.points and b.points[-1].param >= Ls0 - 0.25
+
+
+def test_a_point_exactly_on_the_crossing_still_brackets_it():
+    eq = circle(1.0, ALPHA, grid=Fourier(33), kstar=K, beta=BETA)
+    Ls0 = eq.params["L_star"]
+    Lc = circle_L_star(crossing_curvature(2))
+    b = continuation(factory(), eq.curve, "L_star", [Ls0, 0.5 * (Ls0 + Lc), Lc, Lc - 0.02],
+                     method="natural")
+    assert b.success, b.message
+    assert b.points[2].param == Lc and b.points[2].sector_unstable[2] == 0  # zero: not counted
+    (x,) = [x for x in b.bifurcations if x.sector == 2]
+    assert x.parameter == pytest.approx(Lc, abs=1e-8) and x.multiplicity == 2
+
+
+def test_bifurcation_diagram_draws_stability_and_markers():
+    from qsa.plotting import bifurcation_diagram
+
+    eq = circle(0.95, ALPHA, grid=Fourier(33), kstar=K, beta=BETA)
+    b = continuation(factory(), eq.curve, "L_star", (eq.params["L_star"], 5.45, -0.05))
+    ax = bifurcation_diagram(b, measure="L")
+    styles = [ln.get_linestyle() for ln in ax.lines if len(ln.get_xdata()) > 1]
+    assert styles[0] == "-" and "--" in styles  # stable, then unstable past mode 2
+    markers = [ln for ln in ax.lines if len(ln.get_xdata()) == 1]
+    assert len(markers) == len(b.bifurcations) == 3
+    assert {t.get_text() for t in ax.texts} == {"m=2", "m=3", "m=4"}
+    # the stable run ends exactly at the located mode-2 crossing
+    first = [ln for ln in ax.lines if len(ln.get_xdata()) > 1][0]
+    assert first.get_xdata()[-1] == b.bifurcations[0].parameter
+    with pytest.raises(ValueError, match="measure"):
+        bifurcation_diagram(b, measure="area2")
+
+
+def test_without_the_grid_symmetry_a_double_crossing_is_two_coincident_ones_merged():
+    from qsa.spectra.symmetry import BlochSymmetry
+
+    eq = circle(0.95, ALPHA, grid=Fourier(33), kstar=K, beta=BETA)
+    b = continuation(factory(), eq.curve, "L_star", (eq.params["L_star"], 5.45, -0.05),
+                     symmetry=BlochSymmetry(1, 33))
+    assert [(x.multiplicity, x.sector, x.change) for x in b.bifurcations] == [(2, 0, 2)] * 3
+    for x, m in zip(b.bifurcations, (2, 3, 4), strict=True):
+        assert x.parameter == pytest.approx(circle_L_star(crossing_curvature(m)), abs=1e-7)
+        assert len(x.modes) == 2 and {md.label for md in x.modes} == {"none"}

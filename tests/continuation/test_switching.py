@@ -47,7 +47,7 @@ def test_mode_three_of_a_circle_switches_to_one_triangular_branch(circles):
     # the critical mode of the parent is the mode-3 shape of the first point
     s = first.curve.grid.s
     dk = first.curve.kappa - np.mean(first.curve.kappa)
-    c3 = np.sqrt(np.mean(dk * np.cos(6 * np.pi * s)) ** 2 + np.mean(dk * np.sin(6 * np.pi * s)) ** 2)
+    c3 = np.hypot(np.mean(dk * np.cos(6 * np.pi * s)), np.mean(dk * np.sin(6 * np.pi * s)))
     assert c3 > 0.9 * np.sqrt(np.mean(dk**2)) / np.sqrt(2)
 
 
@@ -75,3 +75,35 @@ def test_switching_rejects_folds_and_foreign_objects(circles):
         switch_branch(circles, "mode 2")
     with pytest.raises(ValueError, match="span"):
         switch_branch(circles, circles.bifurcations[0], span=(5.0, 5.0))
+
+
+def test_isotropy_directions_of_a_four_pulse_pair():
+    """D_4 on the Bloch-1 plane (k = 4, even): two classes of reflection axes, 45 degrees
+    apart, each direction equivalent to its opposite: two directions."""
+    import warnings
+
+    from qsa import FiniteDifference
+    from qsa.continuation import Bifurcation
+    from qsa.continuation.detection import critical_modes
+    from qsa.equilibria import npulse, polish
+    from qsa.spectra.symmetry import sector_spectrum
+
+    eq = npulse(4, 0.15, grid=FiniteDifference(200))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        eq = polish(eq.energy, eq.curve)
+    s = sector_spectrum(eq.energy, eq.curve)
+    i = int(np.flatnonzero((s.sector == 1) & (s.multiplicity == 2))[0])
+    modes = critical_modes(s, i, s.symmetry)
+    bif = Bifurcation(0.0, 2, "branch", modes, 0, eq, float(s.eigenvalues[i]), 2, None,
+                      s.symmetry)
+    dirs = switching_directions(bif, s.symmetry)
+    assert len(dirs) == 2
+    w = eq.curve.dsigma
+    c = abs(np.sum(w * dirs[0] * dirs[1]))
+    assert c == pytest.approx(np.cos(np.pi / 4), abs=1e-8)  # 45 degrees apart in the plane
+    # each is fixed by a reflection of the 4-pulse
+    for d in dirs:
+        fixed = [np.allclose(np.roll(s.symmetry.reflect(d), -j * 50), d, atol=1e-8)
+                 for j in range(4)]
+        assert any(fixed)

@@ -13,8 +13,13 @@ from qsa.energies import (
     multipliers,
     residual_scale,
 )
-from tests.energies.test_local import directions, off_manifold
-from tests.helpers import assert_gradient_matches_energy, assert_hessian_matches_energy, inner
+from tests.helpers import (
+    assert_gradient_matches_energy,
+    assert_hessian_matches_energy,
+    directions,
+    inner,
+    off_manifold,
+)
 
 ENERGIES = {
     "pressure": Pressure(0.7),

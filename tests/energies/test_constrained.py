@@ -127,6 +127,41 @@ def test_residual_scale_of_a_zero_energy_is_one():
     assert residual_scale(CanhamHelfrich(0.0), c) == 1.0
 
 
+@pytest.mark.parametrize("grid", GRIDS, ids=["fourier", "fd"])
+def test_residual_scale_where_every_term_vanishes(grid):
+    """At kappa = kstar (W = W' = 0) the terms of V^n vanish; the scale is their change when
+    kappa and g grow by 1e-3, in closed form on the circle (Delta_s of a constant is 0)."""
+    from qsa.energies import FunctionalizedCurvature
+    from qsa.energies.constrained import SCALE_CHANGE
+
+    R, beta = 1.0 / K, 5.0
+    c = Curve.circle(R, grid)
+    w = DoubleWell(K)
+    k1, L1 = K * (1 + SCALE_CHANGE), 2 * np.pi * R * (1 + SCALE_CHANGE)
+    # faceting + perimeter at L* = L: kappa^2 W', kappa W and kappa beta (L - L*) at (k1, L1)
+    E = Faceting(0.1, K) + Perimeter(beta, 2 * np.pi * R)
+    expected = max(k1**2 * w.dW(k1), k1 * w.W(k1), k1 * beta * (L1 - 2 * np.pi * R))
+    assert residual_scale(E, c) == pytest.approx(expected, rel=1e-6)
+    # functionalized: the Z^2/2 part has mu = -W'' Z = W'' W' (Z = -W'), the largest term
+    fc = FunctionalizedCurvature(0.1, 1.0, K)
+    assert fc.circle_tension(R) == 0.0
+    expected = k1**2 * w.d2W(k1) * w.dW(k1)
+    assert residual_scale(fc, c) == pytest.approx(expected, rel=1e-6)
+    # the equilibrium is recognised as one by its relative residual
+    for energy in (E, fc):
+        V = np.max(np.abs(normal_velocity(energy, c)))
+        assert V <= 1e-6 * residual_scale(energy, c)
+
+
+def test_residual_scale_keeps_the_largest_term_where_it_does_not_vanish():
+    from qsa.energies.constrained import _velocity_terms
+
+    for c in (Curve.circle(1.0, Fourier(33)), skew_curve(Fourier(41))):
+        for E in (Faceting(0.1, K) + Perimeter(5.0, 6.0), CanhamHelfrich(0.3)):
+            terms = max(float(np.max(np.abs(t))) for t in _velocity_terms(E, c))
+            assert residual_scale(E, c) == terms
+
+
 def test_gradient_parts():
     c = skew_curve(Fourier(33))
     E = _sum() + Adhesion(10.0, 0.5)

@@ -14,21 +14,12 @@ from qsa.linalg import to_dense
 from tests.helpers import (
     assert_gradient_matches_energy,
     assert_hessian_matches_energy,
+    coupled_energy,
+    directions,
     fitted_order,
+    off_manifold,
     skew_curve,
 )
-
-
-def coupled_energy():
-    """A density with a p-k coupling (F10 != 0) and non-quadratic dependence."""
-    return FirstOrderEnergy(
-        F=lambda p, k: 0.01 * p**2 + 0.02 * p * k**2 + np.cosh(0.5 * k),
-        F_p=lambda p, k: 0.02 * p + 0.02 * k**2,
-        F_k=lambda p, k: 0.04 * p * k + 0.5 * np.sinh(0.5 * k),
-        F_pp=lambda p, k: 0.02 + 0 * p,
-        F_pk=lambda p, k: 0.04 * k,
-        F_kk=lambda p, k: 0.04 * p + 0.25 * np.cosh(0.5 * k),
-    )
 
 
 def sextic_well(kstar=3.0):
@@ -48,27 +39,6 @@ ENERGIES = {
     "userwell": Faceting(alpha=0.2, kstar=3.0, well=sextic_well()),
 }
 GRIDS = {"fourier": Fourier(65), "fd": FiniteDifference(64)}
-
-
-def off_manifold(grid, seed=0):
-    """A smooth, non-closed state: a closed curve plus a perturbation of kappa and g."""
-    c = skew_curve(grid)
-    rng = np.random.default_rng(seed)
-    s = grid.s
-    dk = 0.2 * rng.standard_normal() * np.cos(2 * np.pi * s + rng.uniform()) + 0.1
-    dg = 0.3 * np.sin(4 * np.pi * s + rng.uniform()) * c.g.mean() * 0.2
-    return Curve(c.kappa + dk, c.g + dg, grid, c.theta0, c.origin)
-
-
-def directions(grid, seed):
-    rng = np.random.default_rng(seed)
-    out = []
-    for _ in range(3):
-        v = rng.standard_normal(2 * grid.N)
-        out.append(v / np.linalg.norm(v))
-    s = grid.s
-    out.append(np.concatenate([np.cos(6 * np.pi * s), 0.5 * np.sin(2 * np.pi * s)]))
-    return out
 
 
 @pytest.mark.parametrize("gname", GRIDS)

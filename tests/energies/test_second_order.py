@@ -16,34 +16,16 @@ from qsa.energies import (
     Well,
 )
 from qsa.linalg import to_dense
-from tests.energies.test_local import coupled_energy, directions, off_manifold
 from tests.helpers import (
     assert_gradient_matches_energy,
     assert_hessian_matches_energy,
+    coupled_energy,
+    coupled_second_order,
+    directions,
     fitted_order,
+    off_manifold,
     skew_curve,
 )
-
-
-def coupled_second_order(placement="node"):
-    """Every partial non-zero somewhere, including the odd couplings F_qp and F_pk."""
-    a, b, c = 0.01, 0.03, 0.02
-
-    def F(q, p, k):
-        return (0.5 * a * q**2 + b * q * p * k + c * q * k**2 + 0.05 * p**2 * k
-                + np.cosh(0.5 * k) + 0.1 * q * np.sin(p))
-
-    def dF(q, p, k):
-        return (a * q + b * p * k + c * k**2 + 0.1 * np.sin(p),
-                b * q * k + 0.1 * p * k + 0.1 * q * np.cos(p),
-                b * q * p + 2 * c * q * k + 0.05 * p**2 + 0.5 * np.sinh(0.5 * k))
-
-    def d2F(q, p, k):
-        return (a + 0 * q, b * k + 0.1 * np.cos(p), b * p + 2 * c * k,
-                0.1 * k - 0.1 * q * np.sin(p), b * q + 0.1 * p, 2 * c * q + 0.25 * np.cosh(0.5 * k))
-
-    return SecondOrderEnergy(F, dF, d2F, placement=placement)
-
 
 ENERGIES = {
     "coupled-node": coupled_second_order("node"),

@@ -7,20 +7,17 @@ from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import CanhamHelfrich, Faceting, FunctionalizedCurvature, Perimeter
 from qsa.equilibria import circle, npulse, splice_polygon
 from qsa.equilibria.newton import MESSAGES, PolishResult, normal_velocity, polish
-from qsa.equilibria.system import EquilibriumSystem, _cumulative_transpose
+from qsa.equilibria.system import EquilibriumSystem
 from qsa.linalg import to_dense
-from tests.helpers import assert_status_convention, fitted_order, skew_curve
+from tests.helpers import (
+    assert_quadratic_convergence,
+    assert_status_convention,
+    fd_jacobian,
+    fitted_order,
+    skew_curve,
+)
 
 K = 5.0
-
-
-def _fd_jacobian(S, x, h=1e-6):
-    J = np.zeros((x.size, x.size))
-    for i in range(x.size):
-        e = np.zeros(x.size)
-        e[i] = h * max(1.0, abs(x[i]))
-        J[:, i] = (S.residual(x + e) - S.residual(x - e)) / (2 * e[i])
-    return J
 
 
 @pytest.mark.parametrize("kind", [Fourier, FiniteDifference])
@@ -32,7 +29,7 @@ def test_jacobian_against_central_differences(kind, which):
     x = S.pack(c)
     x[S.N + 1:] = [0.1, -0.2, 0.3]  # the unfolding columns are checked too
     J = to_dense(S.jacobian(x))
-    Jfd = _fd_jacobian(S, x)
+    Jfd = fd_jacobian(S, x)
     assert J.shape == (S.N + 4, S.N + 4)
     assert np.max(np.abs(J - Jfd)) < 1e-7 * np.max(np.abs(J))
     # a wrong term would show: drop the d mu/dL correction and the check fails
@@ -45,13 +42,6 @@ def test_fast_normal_velocity_matches_energy():
         for E in (Faceting(0.1, K) + Perimeter(5.0, 6.0), CanhamHelfrich(0.3)):
             assert np.allclose(normal_velocity(E, c), E.normal_velocity(c), rtol=0,
                                atol=1e-10 * np.max(np.abs(E.normal_velocity(c))))
-
-
-def test_cumulative_transpose_fd():
-    grid = FiniteDifference(17)
-    v = np.random.default_rng(1).standard_normal(17)
-    assert np.allclose(_cumulative_transpose(grid, v), grid.cumulative_matrix().T @ v,
-                       atol=1e-15)
 
 
 def test_npulse_is_reproduced_and_multipliers():
@@ -71,18 +61,6 @@ def test_npulse_is_reproduced_and_multipliers():
     assert np.max(np.abs(r.unfolding)) < 1e-9
 
 
-def _assert_quadratic(r, bound=1e3):
-    """r_{k+1} / r_k^2 bounded while r_{k+1} is above the round-off floor."""
-    h = np.asarray(r.history)
-    assert h[-1] <= 1e-10
-    floor = 100 * r.noise_floor
-    ratios = [h[k + 1] / h[k] ** 2 for k in range(len(h) - 1) if h[k + 1] > floor]
-    assert len(ratios) >= 2
-    assert max(ratios) < bound, ratios
-    # and the last steps gain orders of magnitude
-    assert h[-1] < 1e-3 * h[-3]
-
-
 def test_quadratic_convergence_from_perturbed_npulse():
     eq = npulse(3, 0.15, grid=Fourier(127))
     c, s = eq.curve, eq.curve.grid.s
@@ -92,7 +70,7 @@ def test_quadratic_convergence_from_perturbed_npulse():
     assert r.success, r.message
     assert r.n_newton == len(r.history) - 1 and r.n_newton <= 8
     assert r.n_lu == r.n_newton and r.n_iter == r.n_newton  # one LU per step; the old name
-    _assert_quadratic(r)
+    assert_quadratic_convergence(r)
     # same equilibrium up to the shift fixed by the phase condition
     assert r.params["L"] == pytest.approx(eq.params["L"], rel=1e-12)
     assert np.sort(r.curve.kappa).max() == pytest.approx(eq.curve.kappa.max(), rel=1e-3)
@@ -103,7 +81,7 @@ def test_quadratic_convergence_from_splice():
     sp = splice_polygon(np.full(4, np.pi / 2), [1.0] * 4, 0.2, grid=Fourier(255), kstar=K)
     r = polish(sp.energy, sp.curve)
     assert r.success, r.message
-    _assert_quadratic(r)
+    assert_quadratic_convergence(r)
     assert r.residual <= 1e-10 * r.residual_scale and r.closure < 1e-12
     # a square: four-fold symmetric kappa
     k = r.curve.kappa
@@ -208,6 +186,16 @@ def test_line_search_keeps_faceting_step_counts():
     assert r.success and r.n_newton <= 6
 
 
+def test_params_record_every_scalar_parameter_of_the_energy():
+    energy, guess = _functionalized_off_family(4, Fourier(101))
+    r = polish(energy, guess)
+    p = r.params
+    assert (p["alpha"], p["eta"], p["kstar"], p["beta"]) == (0.2, 1.0, K, 5.0)
+    assert p["L_star"] == energy.terms()[1].L_star
+    assert p["nu2"] == pytest.approx(5.0 * (r.curve.length() - p["L_star"]), rel=1e-12)
+    assert all(isinstance(v, float) for v in p.values())
+
+
 def test_polish_never_returns_a_worse_state_than_its_guess():
     energy, guess = _functionalized_off_family(3, Fourier(101))
     r = polish(energy, guess, maxiter=1)
@@ -297,5 +285,5 @@ def test_jacobian_with_low_rank_kappa_hessian(kind):
         # eliminate z: the Schur complement is the Jacobian of F
         A, B, C, D = J[:-r, :-r], J[:-r, -r:], J[-r:, :-r], J[-r:, -r:]
         J = A - B @ np.linalg.solve(D, C)
-    Jfd = _fd_jacobian(S, x)
+    Jfd = fd_jacobian(S, x)
     assert np.max(np.abs(J - Jfd)) < 1e-7 * np.max(np.abs(J))

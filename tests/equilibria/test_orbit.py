@@ -2,6 +2,7 @@
 
 import importlib
 
+import mpmath
 import numpy as np
 import pytest
 from scipy.special import ellipkm1
@@ -9,6 +10,7 @@ from scipy.special import ellipkm1
 from qsa.energies.wells import QuarticWell
 from qsa.equilibria import periodic_orbit, periodic_range
 from qsa.equilibria.orbit import _build, _family, orbit_with_turning
+from tests.reference.orbits import mp_period
 
 orbit_module = importlib.import_module("qsa.equilibria.orbit")
 
@@ -115,39 +117,9 @@ def test_non_quartic_symmetric_well(sextic_well):
     assert np.max(np.abs(alpha**2 * orb.derivative(s) ** 2 / 2 - P)) < 1e-12 * np.max(P)
 
 
-def mp_period(alpha, nu1, nu2, a0, b0, dps=60):
-    """Reference period 2 int_a^b alpha / sqrt(2 P) dpsi in mpmath (tanh-sinh)."""
-    import mpmath
-
-    with mpmath.workdps(dps):
-        k = mpmath.mpf(K)
-
-        def P(x):
-            return x**2 * (x - k) ** 2 / 4 + nu1 * x + nu2
-
-        def dP(x):
-            return x * (x - k) * (2 * x - k) / 2 + nu1
-
-        a = mpmath.findroot(P, a0, df=dP)
-        b = mpmath.findroot(P, b0, df=dP)
-        m, h = (a + b) / 2, (b - a) / 2
-
-        def f(u):
-            p = P(m + h * mpmath.sin(u))
-            return alpha * h * mpmath.cos(u) / mpmath.sqrt(2 * p) if p > 0 else mpmath.mpf(0)
-
-        # geometric splits resolve the near-singular peaks at the separatrix end
-        e = [mpmath.mpf(10) ** -j for j in range(dps // 2, 0, -3)]
-        hp = mpmath.pi / 2
-        nodes = [-hp] + [-hp + x for x in e] + [0] + [hp - x for x in reversed(e)] + [hp]
-        return 2 * mpmath.quad(f, nodes)
-
-
 @pytest.mark.parametrize(("nu1", "ystar"), [(0.3, -1e-3), (0.3, -1e-20), (-0.2, 1e-12)])
 def test_polynomial_path_near_the_separatrix_against_mpmath(nu1, ystar):
     """nu1 != 0: the orbit labelled by the offset of its turning point from the well of P."""
-    import mpmath
-
     fam = _family(QuarticWell(K), K, nu1)
     assert fam.q is not None
     orb = _build(fam, 0.1, None, ystar=ystar)
@@ -160,5 +132,5 @@ def test_polynomial_path_near_the_separatrix_against_mpmath(nu1, ystar):
         t = star + mpmath.mpf(ystar)
         nu2 = -(t**2 * (t - k) ** 2 / 4 + nu1 * t)
         a0, b0 = (mpmath.mpf(orb.a), t) if ystar < 0 else (t, mpmath.mpf(orb.b))
-        ref = mp_period(0.1, nu1, nu2, a0, b0, dps=dps)
+        ref = mp_period(0.1, nu1, nu2, a0, b0, kstar=K, dps=dps)
     assert orb.period == pytest.approx(float(ref), rel=1e-12)

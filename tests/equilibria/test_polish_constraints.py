@@ -11,8 +11,7 @@ from qsa.energies import AreaPenalty, CanhamHelfrich, Faceting, Perimeter, Press
 from qsa.equilibria import polish
 from qsa.equilibria.newton import EquilibriumSystem
 from qsa.linalg import to_dense
-from tests.equilibria.test_newton import _assert_quadratic, _fd_jacobian
-from tests.helpers import fitted_order, skew_curve
+from tests.helpers import assert_quadratic_convergence, fd_jacobian, fitted_order, skew_curve
 
 
 def ellipse(grid, a, b):
@@ -44,7 +43,7 @@ def test_jacobian_against_central_differences(kind, ename, cons):
     A, B, Crows, D, low = S.jacobian_parts(x)
     A = to_dense(A) + sum(P @ Q.T for P, Q in low)  # low-rank terms folded back in
     J = np.block([[A, B], [Crows, D]])
-    Jfd = _fd_jacobian(S, x)
+    Jfd = fd_jacobian(S, x)
     assert J.shape == (S.N + 4 + S.m, S.N + 4 + S.m) == (S.size, S.size)
     assert np.max(np.abs(J - Jfd)) < 1e-7 * np.max(np.abs(J))
     assert bool(low) == (ename == "penalty")
@@ -59,7 +58,7 @@ def test_pressurized_ring_relaxes_to_the_circle_of_its_length(grid, p):
     guess = Curve.polar(lambda t: R * (1 + 0.02 * np.cos(2 * t) + 0.01 * np.sin(3 * t)), grid)
     r = polish(CanhamHelfrich(eps) + Pressure(p), guess, constraints=[FixedLength(L)])
     assert r.success, r.message
-    _assert_quadratic(r)
+    assert_quadratic_convergence(r)
     assert r.params["L"] == pytest.approx(L, rel=1e-12)
     # FD: the trapezoidal curvature of a circle is exact, so is the equilibrium
     assert np.allclose(r.curve.kappa, 1 / R, atol=1e-9)
@@ -92,7 +91,7 @@ def vesicle():
 def test_vesicle_is_a_symmetric_non_circular_constrained_equilibrium(vesicle):
     r = vesicle
     assert r.success, r.message
-    _assert_quadratic(r)
+    assert_quadratic_convergence(r)
     c = r.curve
     assert r.residual <= 1e-10 * r.residual_scale and r.closure < 1e-12
     assert c.length() == pytest.approx(2 * np.pi, rel=1e-13)

@@ -8,71 +8,22 @@ import numpy as np
 import pytest
 from scipy.sparse.linalg import splu
 
+from qsa.energies import Perimeter
 from qsa.flows.base import DAESystem, FlowModel
 from qsa.flows.dae import CHA, FacetingFlow
 from qsa.paper import CONVERGENCE, CHAScenario
 from qsa.resample import resample_closed
+from tests.helpers import FLOW_MODELS as MODELS
+from tests.helpers import SexticWell, numerical_jacobians, paper_curve, smooth_curve
 
 PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
 TABLE_T1 = CHAScenario()
 
 
 # ----------------------------------------------------------------- curves
-def smooth_curve(N, scale=1.3, shift=0.05):
-    """Equal-chord nodes of a smooth non-symmetric curve (no symmetry left)."""
-    th = 2 * np.pi * np.arange(1000) / 1000
-    r = 1 + 0.1 * np.cos(3 * th) + 0.05 * np.sin(2 * th)
-    x, y, _ = resample_closed(scale * r * np.cos(th) + shift, scale * r * np.sin(th), N,
-                              method="chord")
-    return x, y
-
-
-def paper_curve(N):
-    """Equal-chord nodes of the convergence study's start (2000 samples resampled)."""
-    x, y, _ = resample_closed(*CONVERGENCE.samples(2000), N, method="chord")
-    return x, y
-
-
 def circle(N, R=1.0):
     th = 2 * np.pi * np.arange(N) / N
     return R * np.cos(th), R * np.sin(th)
-
-
-class SexticWell:
-    """A user well (not the quartic default) to exercise the ``well=`` path."""
-
-    def W(self, k):
-        return 0.25 * k**2 * (k - 2.0) ** 2 + 0.01 * k**6
-
-    def dW(self, k):
-        return 0.5 * k * (k - 2.0) * (2 * k - 2.0) + 0.06 * k**5
-
-    def d2W(self, k):
-        return 0.5 * (6 * k**2 - 12 * k + 4.0) + 0.3 * k**4
-
-
-MODELS = {
-    "cha-neighbours": CHA(**PAPER_CHA),
-    "cha-dense": CHA(**PAPER_CHA, adhesion_method="dense"),
-    "cha-centred-normal": CHA(**PAPER_CHA, force_normal="centred"),
-    "cha-short-kernel": replace(TABLE_T1, l_star=0.35).model(),
-    "ch-no-adhesion": CHA(eps=0.1, beta=1.0, rho=1.5),
-    "facet": FacetingFlow(alpha=0.3, kstar=2.0, beta=5.0, L_star=6.0),
-    "facet-user-well": FacetingFlow(alpha=0.2, kstar=2.0, beta=1.0, L_star=7.0,
-                                    well=SexticWell()),
-}
-
-
-def numerical_jacobians(sys, y, ydot, d=1e-6):
-    n = sys.size
-    Jy = np.zeros((n, n))
-    Jd = np.zeros((n, n))
-    for k in range(n):
-        e = np.zeros(n)
-        e[k] = d
-        Jy[:, k] = (sys.residual(y + e, ydot) - sys.residual(y - e, ydot)) / (2 * d)
-        Jd[:, k] = (sys.residual(y, ydot + e) - sys.residual(y, ydot - e)) / (2 * d)
-    return Jy, Jd
 
 
 # ------------------------------------------------------------- Jacobians
@@ -116,8 +67,9 @@ def test_adhesion_jacobian_near_contact():
     assert np.count_nonzero(J[rows, : 2 * N]) > 2 * N * 8
 
 
-def test_jacobian_nonzeros_are_linear_in_N():
-    model = MODELS["facet"]
+@pytest.mark.parametrize("name", ["facet", "second-order"])
+def test_jacobian_nonzeros_are_linear_in_N(name):
+    model = MODELS[name]
     nnz = []
     for N in (100, 200, 400):
         sys = model.setup(*smooth_curve(N))
@@ -360,7 +312,7 @@ def test_neighbour_list_model_matches_dense_model_table_T1_kernel():
     assert nb.energy(yy) == pytest.approx(de.energy(yy), rel=1e-12)
 
 
-@pytest.mark.parametrize("name", ["cha-neighbours", "facet"])
+@pytest.mark.parametrize("name", ["cha-neighbours", "facet", "second-order"])
 def test_jacobian_is_canonical_csc(name):
     sys = MODELS[name].setup(*smooth_curve(40))
     for _ in range(2):  # the second call reuses the cached pattern
@@ -398,7 +350,7 @@ def test_normal_velocity_agrees_with_curve_energies(which):
     # spectral (Fourier) curve through the same shape. The DAE's V converges to it at
     # second order (equal-chord nodes vs equal arc length nodes also differ at O(h^2)).
     from qsa import Curve, Fourier
-    from qsa.energies import CanhamHelfrich, Faceting, Perimeter
+    from qsa.energies import CanhamHelfrich, Faceting
 
     def rfun(t):
         return 1.3 * (1 + 0.1 * np.cos(3 * t) + 0.05 * np.sin(2 * t))

@@ -1,23 +1,17 @@
 """solve_flow: invariants along the flow, the exact shrinking/growing circle, input errors,
 snapshots, callback, failure reporting."""
 
-import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from qsa import Curve, FiniteDifference
 from qsa.flows import CHA, FacetingFlow, FlowResult, solve_flow
 from qsa.flows.solve import MESSAGES
 from qsa.paper import CONVERGENCE
-from tests.helpers import assert_status_convention
+from tests.helpers import assert_status_convention, circle_radius_errors, paper_samples
 
 PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
-
-
-def paper_samples(M=2000):
-    return CONVERGENCE.samples(M)
 
 
 def wobbly_samples(M=2000, amp=0.1, lobes=3, scale=1.3):
@@ -66,41 +60,9 @@ def test_energy_non_increasing_and_constraints_held(which, tol):
     assert res.n_newton >= 3 * res.n_steps and res.n_lu >= 1 and res.n_factorizations == res.n_lu
 
 
-def _circle_radius_errors(method, tol, N=48, T=0.5, eps=0.1, beta=1.0, rho=1.5):
-    """Max over snapshots of |R_flow(t) - R_ode(t)| for a regular N-gon under CH + penalty.
-
-    A regular N-gon stays regular and its circumradius R obeys dR/dt = V(R) / cos(pi/N),
-    V the discrete normal velocity on the N-gon: kappa = |D1 X| |D2 X| / L^3 (stencils),
-    D2 kappa = 0, L = 2 N R sin(pi/N).
-    """
-    th = 2 * np.pi * np.arange(N) / N
-    res = solve_flow(CHA(eps=eps, beta=beta, rho=rho), (np.cos(th), np.sin(th)), T, N=N,
-                     tol=tol, method=method, t_eval=np.linspace(0, T, 11))
-    a = 2 * np.pi / N
-    L0 = 2 * N * math.sin(math.pi / N)
-
-    def rhs(t, R):
-        L = 2 * N * R * math.sin(math.pi / N)
-        d1 = R * math.sin(a) * N
-        d2 = 2 * R * (1 - math.cos(a)) * N**2
-        kappa = d1 * d2 / L**3
-        V = eps * 0.5 * kappa**3 - beta * (L - rho * L0) * kappa
-        return V / math.cos(math.pi / N)
-
-    ref = solve_ivp(rhs, (0, T), [1.0], t_eval=res.t, rtol=1e-12, atol=1e-14)
-    assert ref.y[0, -1] > 1.1  # the test has teeth: R moved by much more than 10 tol
-    errors = []
-    for i in range(res.t.size):
-        X, Y = res.positions(i)
-        r = np.hypot(X - X.mean(), Y - Y.mean())
-        assert np.ptp(r) < 1e-8  # still a circle
-        errors.append(abs(r.mean() - ref.y[0, i]))
-    return max(errors), res
-
-
 @pytest.mark.parametrize("method, tol", [("be", 1e-3), ("bdf2", 1e-3), ("bdf2", 1e-4)])
 def test_circle_follows_scalar_ode_of_discrete_velocity(method, tol):
-    err, _ = _circle_radius_errors(method, tol)
+    err, _ = circle_radius_errors(method, tol)
     assert err < 10 * tol
 
 
@@ -108,7 +70,7 @@ def test_backward_euler_global_error_scales_like_sqrt_tol():
     # Local error control per step: k ~ sqrt(tol), so the global error ~ n tol ~ sqrt(tol)
     # (why 10 tol can only hold for loose tolerances with backward Euler).
     tols = [1e-3, 1e-4, 1e-5]
-    errs = [_circle_radius_errors("be", tol)[0] for tol in tols]
+    errs = [circle_radius_errors("be", tol)[0] for tol in tols]
     slope = np.polyfit(np.log(tols), np.log(errs), 1)[0]
     assert 0.35 < slope < 0.65, (errs, slope)
 

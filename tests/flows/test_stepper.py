@@ -16,7 +16,7 @@ from qsa.flows.stepper import (
     interleaved_ordering,
 )
 from qsa.paper import CONVERGENCE, CHAScenario
-from tests.flows.test_dae import paper_curve
+from tests.helpers import circle_radius_errors, paper_curve, paper_samples
 
 PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
 
@@ -83,10 +83,8 @@ def test_simplified_newton_solves_the_backward_euler_equations():
 def test_bdf2_reaches_backward_euler_accuracy_with_five_times_fewer_steps():
     # A regular polygon under CH + length penalty: exact reference from the scalar ODE
     # (tests/flows/test_solve.py). Backward Euler at tol 1e-6 against BDF2 at 5e-6.
-    from tests.flows.test_solve import _circle_radius_errors
-
-    err_be, be = _circle_radius_errors("be", 1e-6)
-    err_bdf, bdf = _circle_radius_errors("bdf2", 5e-6)
+    err_be, be = circle_radius_errors("be", 1e-6)
+    err_bdf, bdf = circle_radius_errors("bdf2", 5e-6)
     assert err_bdf <= err_be
     assert bdf.n_steps * 5 <= be.n_steps, (bdf.n_steps, be.n_steps)
 
@@ -113,8 +111,6 @@ def test_bdf2_global_error_is_second_order_in_the_step():
 def test_bdf2_beats_backward_euler_on_the_paper_example():
     # The appendix example (N = 64, t = 0.05): backward Euler at tol 1e-6 against a BDF2
     # reference at tol 1e-10; BDF2 at tol 3e-5 is as accurate with >= 5x fewer steps.
-    from tests.flows.test_solve import paper_samples
-
     model, init, N, T = CHA(**PAPER_CHA), paper_samples(), 64, 0.05
     ref = solve_flow(model, init, T, N=N, tol=1e-10, method="bdf2", t_eval=[T])
     be = solve_flow(model, init, T, N=N, tol=1e-6, t_eval=[T])

@@ -86,9 +86,11 @@ def test_reproduce_fronts_cli(tmp_path, capsys):
     assert d["error_at"]["0.5"] <= d["error_at"]["0.9"] <= d["max_error"]
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert (tmp_path / "o" / "fronts_short-facet.json").exists()
-    args = parser.parse_args(["reproduce", "fronts", "--N", "10"])
-    with pytest.raises(ValueError, match="--N"):
-        args.func(args)
+    from qsa.cli import main
+
+    capsys.readouterr()
+    assert main(["reproduce", "fronts", "--N", "10"]) == 2  # refused by the option's type
+    assert "argument --N: must be an integer >= 50, got 10" in capsys.readouterr().err
 
 
 def test_no_collision_before_t_final():

@@ -226,3 +226,27 @@ def test_coarsening_events_ignore_flicker():
     assert events == [(3.0, 18, 16), (5.0, 16, 14), (7.0, 14, 8), (8.0, 8, 6)]
     assert [e.before for e in events] == [18, 16, 14, 8]
     assert coarsening_events([], []).events == []
+
+
+def test_facet_values_at_the_paper_figure_times_and_plateaus():
+    from dataclasses import replace
+
+    out = run_facet(FacetScenario(t_final=2e-5), spinodal_time=1e-5, progress=False,
+                    n_snapshots=3)
+    # a synthetic history on the physical clock: 18 fronts from 3e-4, events at 1e-2, 1
+    t = np.concatenate([[0.0], np.geomspace(1e-4, 4.5, 400)])
+    fronts = np.where(t < 3e-4, 0, np.where(t < 1e-2, 18, np.where(t < 1.0, 10, 6)))
+    R = np.where(fronts == 18, 0.5, np.where(fronts == 10, 0.04, 3e-4))
+    run = replace(out, t=t, fronts=fronts, R_kappa=R, energy=10 - np.log1p(t))
+    rows = run.figure_rows
+    sc = run.scenario
+    assert [r.paper_t for r in rows] == list(sc.figure_times)
+    assert [r.t for r in rows] == pytest.approx([2 * x for x in sc.figure_times])
+    assert [r.fronts for r in rows] == [18, 10, 10, 10, 6]
+    assert rows[0].paper_fronts == 18 and rows[-1].paper_fronts == 6
+    assert rows[1].paper_fronts is None and rows[0].paper_R_kappa == 1e-3
+    plateaus = run.plateaus
+    assert [p.fronts for p in plateaus] == [18, 10, 6]
+    assert [p.R_kappa for p in plateaus] == pytest.approx([0.5, 0.04, 3e-4])
+    s = run.summary()
+    assert len(s["figure_rows"]) == 5 and s["plateaus"][1]["fronts"] == 10

@@ -133,3 +133,46 @@ def test_result_types_and_stop_after_max_collisions(trapezoid):
     assert short.status == 0 and short.first_collision is None
     assert_status_convention(short, MESSAGES)
     assert np.isclose(short.t[-1], 0.2 * ev.time)
+
+
+def _corners(p, L):
+    """Corner lengths (up -> down) and facet lengths of positions (up, down, ...)."""
+    g = np.diff(np.append(p, p[0] + L))
+    return g[0::2], g[1::2]
+
+
+@pytest.mark.parametrize("i", [2, 3, 5])  # a corner, a facet, the facet across s = 0
+def test_remove_pair_keeps_the_turning_local(i):
+    from qsa.reduction.integrate import remove_pair
+
+    L = 3.0
+    p = np.array([0.1, 0.35, 0.7, 0.78, 1.3, 1.6])
+    if i == 5:
+        p = np.array([0.1, 0.35, 0.7, 0.98, 1.3, 3.05])  # facet (3.05, 0.1 + L) short
+    corners, facets = _corners(p, L)
+    q, ids = remove_pair(p, np.arange(6), i, L)
+    assert q.size == 4 and np.all(np.diff(q) > 0) and q[-1] - q[0] < L
+    c2, f2 = _corners(q, L)
+    assert np.isclose(c2.sum(), corners.sum())  # total turning kstar * sum(corners) kept
+    if i == 2:  # corner (0.7, 0.78) gone: its 0.08 goes half to each neighbour
+        assert ids.tolist() == [0, 1, 4, 5]
+        assert np.allclose(c2, [0.25 + 0.04, 0.3 + 0.04])
+        assert np.allclose(0.5 * (q[0::2] + q[1::2]), 0.5 * (p[[0, 4]] + p[[1, 5]]))
+    elif i == 3:  # facet (0.78, 1.3) gone: corners (0.7, 0.78) and (1.3, 1.6) merge
+        assert ids.tolist() == [0, 1, 2, 5]
+        assert np.isclose(c2[1], 0.08 + 0.3)
+    else:  # facet across the base point: the merged corner is (1.3, 0.35 + L)
+        assert ids.tolist() == [2, 3, 4, 1]
+        assert np.isclose(c2[1], corners[2] + corners[0])
+        assert np.isclose(0.5 * (q[2] + q[3]), 0.5 * (1.3 + 0.35 + L))
+    # "uniform" only removes the pair (the closure spreads the deficit)
+    qu, idu = remove_pair(p, np.arange(6), i, L, "uniform")
+    assert idu.tolist() == ids.tolist()
+    kept = np.delete(p, [i, (i + 1) % 6])
+    assert np.allclose(qu, kept if i != 5 else np.append(kept[1:], kept[0] + L))
+
+
+def test_redistribute_is_checked(trapezoid):
+    ode, p = trapezoid
+    with pytest.raises(ValueError, match="redistribute"):
+        ode.integrate(p, 0.01, redistribute="nearest")

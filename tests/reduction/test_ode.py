@@ -213,3 +213,23 @@ def test_pickles_for_process_pools(triangle):
     other = pickle.loads(pickle.dumps(ode))
     assert other.backend_used == ode.backend_used
     assert np.array_equal(other.velocity(p, cut), ode.velocity(p, cut))
+
+
+def test_corrected_jacobian_is_consistently_differenced(triangle):
+    # jacobian() differences the velocity of the ODE's own force: with the Newton
+    # correction the corrected velocity (central differences, O(h^2))
+    ode, p, cut = triangle
+    corr = FrontODE(ALPHA, KSTAR, ode.length, points_per_width=8, correction="newton")
+    h = 1e-3 * corr.front.width
+    J, JT = corr.jacobian(p, cut)
+    J2, _ = corr.jacobian(p, cut, step=h / 2)
+    assert np.max(np.abs(J - J2)) < 1e-5 * np.max(np.abs(J))
+    # a directional difference of the corrected velocity along a tangent direction
+    q = corr.tangent_basis(p, cut)[:, 0]
+    dv = (corr.velocity(p + 10 * h * q, cut) - corr.velocity(p - 10 * h * q, cut)) / (20 * h)
+    assert np.max(np.abs(J @ q - dv)) < 1e-4 * np.max(np.abs(dv))
+    # and it is not the uncorrected Jacobian (by 0.1% here, far above the differencing)
+    J0, _ = ode.jacobian(p, cut)
+    assert np.max(np.abs(J - J0)) > 100 * np.max(np.abs(J - J2))
+    ev = corr.eigenvalues(p, cut)
+    assert np.allclose(np.sort(ev.real), np.sort(np.linalg.eigvals(JT).real))

@@ -14,7 +14,7 @@ from qsa.spectra.symmetry import (
     sector_basis,
     sector_spectrum,
 )
-from tests.spectra.conftest import faceting_circle_eigenvalues
+from tests.reference.circle_spectra import faceting_circle_eigenvalues
 
 
 def test_circle_sectors_are_the_modes_of_the_closed_form():
@@ -25,7 +25,8 @@ def test_circle_sectors_are_the_modes_of_the_closed_form():
     assert s.symmetry.circle and s.complete
     # one entry per mode m != 1 (mode 1 = translations = the kernel), modes >= 2 double
     assert sorted(s.sector.tolist()) == [0] + list(range(2, 17))
-    for lam_i, m, mult, err in zip(s.eigenvalues, s.sector, s.multiplicity, s.errors):
+    for lam_i, m, mult, err in zip(s.eigenvalues, s.sector, s.multiplicity, s.errors,
+                                   strict=True):
         assert lam_i == pytest.approx(lam[m], rel=1e-9)
         assert mult == (1 if m == 0 else 2) and err <= 1e-9 * abs(lam_i)
     assert s.kernel.size == 2 and np.all(np.abs(s.kernel) < 1e-8)

@@ -30,8 +30,8 @@ class CHASystem(CurveDAE):
 
     fields = ("x", "y", "kappa", "kss", "V")
 
-    def __init__(self, model, x, y, *, adhesion_method="neighbours", L0=None):
-        super().__init__(x, y)
+    def __init__(self, model, x, y, *, adhesion_method="neighbours", L0=None, constraints=()):
+        super().__init__(x, y, constraints)
         self.model = model
         self.kernel = model.kernel
         #: neighbour-list radius (``None`` without adhesion or on the dense path)
@@ -43,10 +43,10 @@ class CHASystem(CurveDAE):
         self.L0 = L if L0 is None else real_number(L0, "L0", positive=True)
         kappa = self.geometric_curvature(x, y, L)
         kss = self._d2(kappa) / L**2
-        y0 = np.concatenate([x, y, kappa, kss, np.zeros(self.N), [L]])
+        y0 = self._stack(x, y, kappa, kss, np.zeros(self.N), L=L)
         o = self.offset["V"]
         y0[o : o + self.N] = self._velocity(y0, *self._geometry(x, y)[:2])
-        self.y0 = y0
+        self.y0 = self._finish_setup(y0)
 
     def _adhesion(self, X, Y, L):
         """Pairs, ``B`` and the force at weights ``w = L/N`` (or zeros without adhesion)."""
@@ -172,7 +172,7 @@ class CHASystem(CurveDAE):
         return self.unpack(y)["V"].copy()
 
     def bound_constants(self):
-        return {"L0": float(self.L0)}
+        return {"L0": float(self.L0), **super().bound_constants()}
 
     def metadata(self):
         m = self.model
@@ -189,6 +189,7 @@ class CHASystem(CurveDAE):
             "adhesion_method": self.adhesion_method,
             "force_normal": m.force_normal,
             "unknowns": list(self.fields) + ["L"],
+            **self._constraint_metadata(),
         }
 
 
@@ -278,7 +279,7 @@ class CHA(FlowModel):
                     f"N >= {math.ceil(L / self.l_star)}"
                 )
 
-    def setup(self, x, y, *, L0=None):
+    def setup(self, x, y, *, L0=None, constraints=None):
         """Bind to initial positions (projected to equal chords).
 
         Parameters
@@ -289,7 +290,10 @@ class CHA(FlowModel):
             Reference length of the penalty; default the length of ``x, y``
             (the paper's ``|Gamma_0|``). Pass the original ``L0`` when resuming
             from a later state (see ``CHASystem.bound_constants``).
+        constraints : sequence of Constraint, optional
+            ``FixedLength()`` / ``FixedArea()``: a length- or area-preserving flow
+            (:mod:`qsa.flows.models.constrained`); ``None`` targets are the initial values.
         """
         self.check_resolution(x, y)
         return CHASystem(self, np.asarray(x, float), np.asarray(y, float),
-                         adhesion_method=self.adhesion_method, L0=L0)
+                         adhesion_method=self.adhesion_method, L0=L0, constraints=constraints)

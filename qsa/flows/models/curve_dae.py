@@ -12,6 +12,7 @@ import scipy.sparse as sp
 
 from qsa.curve import self_intersections
 from qsa.flows.base import DAESystem
+from qsa.flows.models.constrained import ConstraintRows, polygon_area
 from qsa.linalg import factorize
 
 __all__ = ["CurveDAE", "equalize_chords", "self_intersections"]
@@ -156,19 +157,24 @@ class CurveDAE(DAESystem):
     and ``"kappa"`` third), the model rows (``_model_residual``,
     ``_model_jacobian``) and the energy.
 
-    Layout of ``y``: ``[field_0 (N), field_1 (N), ..., L]``; rows: normal
+    Layout of ``y``: ``[field_0 (N), field_1 (N), ..., multipliers (m), L]``; rows: normal
     motion (N), chords (N), curvature (N), model rows (N per auxiliary field
-    and ``V``), gauge (1).
+    and ``V``), constraint rows (m), gauge (1). The ``m`` multipliers ``mu`` of
+    length / area constraints (:mod:`qsa.flows.models.constrained`) are absent
+    without constraints.
     """
 
     fields: tuple = ()
 
-    def __init__(self, x, y):
+    def __init__(self, x, y, constraints=()):
         self.N = N = x.size
         self.h = 1.0 / N
-        self.size = len(self.fields) * N + 1
+        nf = len(self.fields) * N
+        self.constraint_rows = ConstraintRows(constraints, N, nf)
+        m = self.constraint_rows.m
+        self.size = nf + m + 1
         self.offset = {name: k * N for k, name in enumerate(self.fields)}
-        self.iL = len(self.fields) * N
+        self.iL = nf + m
         self.error_index = np.arange(2 * N)
         self._j = np.arange(N)
         self._jp = np.roll(self._j, -1)
@@ -181,8 +187,45 @@ class CurveDAE(DAESystem):
         if y.shape != (self.size,):
             raise ValueError(f"y has shape {y.shape}, expected ({self.size},)")
         out = {name: y[k * self.N : (k + 1) * self.N] for k, name in enumerate(self.fields)}
+        out["multipliers"] = y[self.constraint_rows.index]
         out["L"] = y[self.iL]  # NumPy scalar: overflow gives inf, not OverflowError
         return out
+
+    @property
+    def constraints(self) -> tuple:
+        """The bound length / area constraints (empty for an unconstrained flow)."""
+        return self.constraint_rows.constraints
+
+    def area(self, y) -> float:
+        """Polygon area of the nodes of state ``y`` (the area a ``FixedArea`` conserves)."""
+        return polygon_area(*self.positions(y))
+
+    def _finish_setup(self, y0):
+        """Bind the constraints to the initial state and add ``mu . n`` to its velocity.
+
+        ``y0`` holds the energy's own velocity ``V_E`` in the ``V`` block; the initial
+        multipliers make ``V = V_E + mu . n`` orthogonal to every ``n_c``.
+        """
+        rows = self.constraint_rows
+        if rows.m == 0:
+            return y0
+        N = self.N
+        rows.bind(y0[:N], y0[N:2 * N], y0[self.iL])
+        kappa = y0[2 * N:3 * N]
+        o = self.offset["V"]
+        mu = rows.initial_multipliers(kappa, y0[o:o + N])
+        y0 = np.array(y0)
+        y0[rows.index] = mu
+        y0[o:o + N] += mu @ rows.normals(kappa)
+        return y0
+
+    def _constraint_metadata(self) -> dict:
+        """``{"constraints": [...]}`` for a constrained flow, ``{}`` otherwise."""
+        return {"constraints": self.constraint_rows.params()} if self.constraint_rows.m else {}
+
+    def _stack(self, *blocks, L):
+        """``[blocks..., mu = 0, L]``: an initial state in the layout of ``y``."""
+        return np.concatenate(list(blocks) + [np.zeros(self.constraint_rows.m), [L]])
 
     def positions(self, y):
         y = np.asarray(y, dtype=float)
@@ -205,12 +248,12 @@ class CurveDAE(DAESystem):
         return float(np.sum(V * V) * self.length(y) / self.N)
 
     def bound_constants(self) -> dict:
-        """Constants fixed by ``setup`` from the initial data (``{}`` here; CHA: ``L0``).
+        """Constants fixed by ``setup`` from the initial data (CHA: ``L0``; the constraints).
 
         ``model.setup(x, y, **sys.bound_constants())`` rebuilds the same system from
         any later positions (used when resuming a run from a checkpoint).
         """
-        return {}
+        return self._constraint_metadata()
 
     @property
     def differential_rows(self):
@@ -228,7 +271,16 @@ class CurveDAE(DAESystem):
         Returns
         -------
         ndarray, shape (size,)
+
+        Raises
+        ------
+        ValueError
+            For a constrained flow: its multipliers make the DAE index 2, and their rate
+            is not fixed by these equations.
         """
+        if self.constraint_rows.m:
+            raise ValueError("time_derivative: a length / area constrained flow is an index 2 "
+                             "DAE; the multipliers' rate is not fixed by the first derivatives")
         y = np.asarray(y, dtype=float)
         zero = np.zeros(self.size)
         Jy = self.jacobian(y, zero, 0.0)
@@ -282,7 +334,12 @@ class CurveDAE(DAESystem):
         F[:N] = Xd * ty - Yd * tx - L * V
         F[N : 2 * N] = (ex * ex + ey * ey) / h**2 - L * L
         F[2 * N : 3 * N] = kappa - (tx * d2y - ty * d2x) / L**3
-        F[3 * N : self.size - 1] = self._model_residual(y, tx, ty)
+        rows = self.constraint_rows
+        F[3 * N : rows.index[0] if rows.m else self.iL] = self._model_residual(y, tx, ty)
+        if rows.m:
+            o = self.offset["V"]
+            F[o:o + N] -= rows.velocity_term(y, kappa)
+            F[rows.index] = rows.defects(X, Y, L)
         F[-1] = h * np.sum(Xd * tx + Yd * ty)
         return F
 
@@ -359,6 +416,8 @@ class CurveDAE(DAESystem):
         T.add(r, iY[jm], -Yd / 2)
         T.add(r, iX, c * h * tx)
         T.add(r, iY, c * h * ty)
+        if self.constraint_rows.m:
+            self.constraint_rows.add_jacobian(T, y, iV, iX, iY, iK, iL)
         if not split:
             self._model_jacobian(T, y, tx, ty)
             J = T.tocsc(self.size)

@@ -22,18 +22,18 @@ class FacetingSystem(CurveDAE):
 
     fields = ("x", "y", "kappa", "mu", "mss", "V")
 
-    def __init__(self, model, x, y):
-        super().__init__(x, y)
+    def __init__(self, model, x, y, constraints=()):
+        super().__init__(x, y, constraints)
         self.model = model
         self.well, _ = resolve_well(model.well, model.kstar, equal_depth=False)
         x, y, L = equalize_chords(x, y)
         kappa = self.geometric_curvature(x, y, L)
         mu = -(model.alpha**2) * self._d2(kappa) / L**2 + self.well.dW(kappa)
         mss = self._d2(mu) / L**2
-        y0 = np.concatenate([x, y, kappa, mu, mss, np.zeros(self.N), [L]])
+        y0 = self._stack(x, y, kappa, mu, mss, np.zeros(self.N), L=L)
         o = self.offset["V"]
         y0[o : o + self.N] = self._velocity(y0)
-        self.y0 = y0
+        self.y0 = self._finish_setup(y0)
 
     def _edges(self, kappa, L):
         """Edge slopes and their nodal mean square.
@@ -120,6 +120,7 @@ class FacetingSystem(CurveDAE):
             "L_star": m.L_star,
             "well": repr(self.well),
             "unknowns": list(self.fields) + ["L"],
+            **self._constraint_metadata(),
         }
 
 
@@ -171,7 +172,16 @@ class FacetingFlow(FlowModel):
         """Raise ``ValueError`` for NaN, too few nodes or a clockwise curve."""
         _check_xy(x, y, self.min_nodes())
 
-    def setup(self, x, y):
-        """Bind to initial positions (projected to equal chords)."""
+    def setup(self, x, y, *, constraints=None):
+        """Bind to initial positions (projected to equal chords).
+
+        Parameters
+        ----------
+        x, y : array_like, shape (N,)
+        constraints : sequence of Constraint, optional
+            ``FixedLength()`` / ``FixedArea()``: a length- or area-preserving flow
+            (:mod:`qsa.flows.models.constrained`); ``None`` targets are the initial values.
+        """
         self.check_resolution(x, y)
-        return FacetingSystem(self, np.asarray(x, float), np.asarray(y, float))
+        return FacetingSystem(self, np.asarray(x, float), np.asarray(y, float),
+                              constraints=constraints)

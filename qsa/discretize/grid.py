@@ -1,29 +1,10 @@
-"""Periodic grids on the parameter circle S = [0, 1).
+"""The interface of the periodic grids on S = [0, 1): :class:`Grid` and its helpers.
 
-Two discretizations share one interface:
-
-``FiniteDifference(N)``
-    Second-order centred stencils, the paper's (appendix "Discussion of
-    Numerical Scheme"): a skew-symmetric first derivative
-    ``(f[j+1] - f[j-1]) / 2h`` and the compact second difference. Operators are
-    ``scipy.sparse`` CSR matrices, so every local operator costs O(N).
-``Fourier(N)``
-    Pseudo-spectral differentiation on N equispaced nodes (odd N only: with even
-    N the derivative annihilates the Nyquist mode, which then shows up as a fake
-    eigenvalue, Conventions and errata, section 4). Operators are dense ``ndarray``.
-
-Besides the nodal derivative, each grid exposes an *edge* pair used by energies
-that contain ``|grad_s kappa|^2``: ``edge_difference`` (nodes -> edges) and
-``edge_average``. For finite differences the edges are the midpoints
-``s_{j+1/2}``, which makes the discrete Laplacian compact (3-point) and keeps the
-highest mode properly penalised; for Fourier the edges are the nodes.
-
-The cumulative integral ``cumulative(f)`` approximates ``int_0^s f ds`` (so the
-paper's ``D f = cumulative(f * g)``), to second order (trapezoid) or spectrally.
-
-Notes
------
-Equation labels: e:D_def (the operator D and its adjoint D-dagger).
+Nodes ``s_j = j / N``, quadrature weights, the nodal and edge derivatives, diagonal
+scalings, the cumulative integral ``int_0^s f ds`` (e:D_def: the paper's
+``D f = cumulative(f * g)``) and its transpose, interpolation and resampling. The two
+implementations are :class:`~qsa.discretize.finite_difference.FiniteDifference` and
+:class:`~qsa.discretize.fourier.Fourier` (:mod:`qsa.discretize` describes both).
 """
 
 from __future__ import annotations
@@ -33,11 +14,10 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.interpolate import CubicSpline
 
 from qsa._checks import integer
 
-__all__ = ["Grid", "FiniteDifference", "Fourier", "MIN_NODES", "cumulative_factors"]
+__all__ = ["Grid", "MIN_NODES", "cumulative_factors"]
 
 #: Smallest number of nodes a grid accepts.
 MIN_NODES = 8
@@ -68,6 +48,7 @@ def cumulative_factors(N):
     Examples
     --------
     >>> import numpy as np, scipy.sparse.linalg as spla
+    >>> from qsa import FiniteDifference
     >>> Bd, R = cumulative_factors(8)
     >>> f = np.arange(8.0) ** 2
     >>> bool(np.allclose(spla.spsolve(Bd.tocsc(), R @ f), FiniteDifference(8).cumulative(f)))
@@ -473,192 +454,3 @@ class Grid:
 
     def __hash__(self):
         return hash((type(self).__name__, self.N))
-
-
-class FiniteDifference(Grid):
-    """Second-order centred finite differences on S (the paper's stencils).
-
-    Parameters
-    ----------
-    N : int
-        Number of nodes, ``N >= 8``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import FiniteDifference
-    >>> grid = FiniteDifference(400)
-    >>> D = grid.derivative()
-    >>> err = np.max(np.abs(D @ np.sin(2*np.pi*grid.s) - 2*np.pi*np.cos(2*np.pi*grid.s)))
-    >>> bool(err < 2e-3)
-    True
-    """
-
-    def __init__(self, N):
-        object.__setattr__(self, "N", _check_N(N, "finite-difference"))
-        object.__setattr__(self, "kind", "fd")
-        object.__setattr__(self, "sparse", True)
-
-    def _shift(self, k):
-        """Sparse periodic shift: ``(S f)_j = f_{j+k}``."""
-        N = self.N
-        rows = np.arange(N)
-        return sp.csr_matrix((np.ones(N), (rows, (rows + k) % N)), shape=(N, N))
-
-    # The operators depend only on N and are cached on the (immutable) grid; treat the
-    # returned matrices as read-only.
-    @cached_property
-    def _ops(self):
-        S1, Sm1, I = self._shift(1), self._shift(-1), self.identity()
-        return {
-            "d1": ((S1 - Sm1) * (0.5 * self.N)).tocsr(),
-            "d2": ((S1 - 2 * I + Sm1) * self.N**2).tocsr(),
-            "edge_diff": ((S1 - I) * self.N).tocsr(),
-            "edge_avg": ((S1 + I) * 0.5).tocsr(),
-        }
-
-    def derivative(self):
-        return self._ops["d1"]
-
-    def second_derivative(self):
-        return self._ops["d2"]
-
-    def edge_difference(self):
-        """Forward difference to the midpoints: ``(f_{j+1} - f_j) / h``."""
-        return self._ops["edge_diff"]
-
-    def edge_average(self):
-        """Midpoint average ``(f_j + f_{j+1}) / 2``."""
-        return self._ops["edge_avg"]
-
-    def cumulative(self, f):
-        f = np.asarray(_as_values(f, self.N), dtype=float)
-        out = np.zeros_like(f)
-        out[1:] = np.cumsum(0.5 * self.h * (f[1:] + f[:-1]), axis=0)
-        return out
-
-    def cumulative_transpose(self, v):
-        # (C f)_i = h sum_{k<i} (f_k + f_{k+1})/2, so (C^T v)_j = h (tail_j + v_j/2) for
-        # j >= 1 and h tail_0 / 2 for j = 0, with tail_j = sum_{i>j} v_i.
-        v = np.asarray(_as_values(v, self.N), dtype=float)
-        tail = np.zeros_like(v)
-        tail[:-1] = np.cumsum(v[:0:-1], axis=0)[::-1]
-        out = self.h * (tail + 0.5 * v)
-        out[0] = 0.5 * self.h * tail[0]
-        return out
-
-    def interpolate(self, f, s):
-        f = np.asarray(_as_values(f, self.N), dtype=float)
-        s = np.asarray(s, dtype=float) % 1.0
-        x = np.append(self.s, 1.0)
-        y = np.concatenate([f, f[:1]], axis=0)
-        return CubicSpline(x, y, bc_type="periodic", axis=0)(s)
-
-
-class Fourier(Grid):
-    """Pseudo-spectral (Fourier collocation) grid on S with an odd number of nodes.
-
-    Parameters
-    ----------
-    N : int
-        Number of nodes; odd and ``>= 9``. Even N is refused: the spectral
-        derivative then annihilates the Nyquist mode, which would appear as a
-        spurious eigenvalue (Conventions and errata, section 4).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from qsa import Fourier
-    >>> grid = Fourier(33)
-    >>> f = np.exp(np.sin(2*np.pi*grid.s))
-    >>> exact = 2*np.pi*np.cos(2*np.pi*grid.s)*f
-    >>> bool(np.max(np.abs(grid.derivative() @ f - exact)) < 1e-10)
-    True
-    """
-
-    def __init__(self, N):
-        N = _check_N(N, "Fourier")
-        if N % 2 == 0:
-            raise ValueError(
-                f"N={N}: Fourier grids need an odd N (the Nyquist mode of an even grid is a "
-                f"spurious kernel mode of d/ds); use N={N + 1}"
-            )
-        object.__setattr__(self, "N", N)
-        object.__setattr__(self, "kind", "fourier")
-        object.__setattr__(self, "sparse", False)
-
-    @cached_property
-    def wavenumbers(self) -> np.ndarray:
-        """Integer wavenumbers in FFT order, shape (N,)."""
-        return np.fft.fftfreq(self.N, d=1.0 / self.N)
-
-    @cached_property
-    def _D(self):
-        N = self.N
-        j = np.arange(N)
-        diff = j[:, None] - j[None, :]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            D = 0.5 * (-1.0) ** diff / np.sin(np.pi * diff / N)
-        D[j, j] = 0.0
-        D *= 2 * np.pi
-        D.flags.writeable = False
-        return D
-
-    def derivative(self):
-        return self._D.copy()
-
-    def second_derivative(self):
-        return self._D @ self._D
-
-    def edge_difference(self):
-        return self.derivative()
-
-    def edge_average(self):
-        return np.eye(self.N)
-
-    def cumulative(self, f):
-        f = np.asarray(_as_values(f, self.N), dtype=float)
-        fh = np.fft.fft(f, axis=0)
-        mean = fh[0].real / self.N
-        k = self.wavenumbers.reshape((-1,) + (1,) * (f.ndim - 1))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            Fh = np.where(k == 0, 0.0, fh / (2j * np.pi * k))
-        F = np.fft.ifft(Fh, axis=0).real
-        s = self.s.reshape((-1,) + (1,) * (f.ndim - 1))
-        return F - F[:1] + mean * s
-
-    def cumulative_transpose(self, v):
-        # C = (I - 1 e_0^T) Q + s 1^T / N with Q the zero-mean antiderivative, a real
-        # circulant with imaginary symbol 1/(2 pi i k): Q^T = -Q, hence
-        # C^T v = -Q (v - e_0 sum(v)) + (s . v / N) 1.
-        v = np.asarray(_as_values(v, self.N), dtype=float)
-        u = v.copy()
-        u[0] = u[0] - v.sum(axis=0)
-        uh = np.fft.fft(u, axis=0)
-        k = self.wavenumbers.reshape((-1,) + (1,) * (v.ndim - 1))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            Qu = np.fft.ifft(np.where(k == 0, 0.0, uh / (2j * np.pi * k)), axis=0).real
-        return -Qu + np.tensordot(self.s, v, axes=(0, 0)) / self.N
-
-    def interpolate(self, f, s):
-        f = np.asarray(_as_values(f, self.N), dtype=float)
-        s = np.asarray(s, dtype=float)
-        fh = np.fft.fft(f, axis=0) / self.N
-        phase = np.exp(2j * np.pi * np.outer(s.ravel(), self.wavenumbers))
-        out = (phase @ fh.reshape(self.N, -1)).real
-        return out.reshape(s.shape + f.shape[1:])
-
-    def resample(self, f, other):
-        f = np.asarray(_as_values(f, self.N), dtype=float)
-        if isinstance(other, Fourier) and f.ndim == 1:
-            # Exact spectral transfer by zero-padding / truncation.
-            fh = np.fft.fftshift(np.fft.fft(f)) / self.N
-            M = other.N
-            if M >= self.N:
-                pad = (M - self.N) // 2
-                gh = np.pad(fh, (pad, pad))
-            else:
-                cut = (self.N - M) // 2
-                gh = fh[cut : cut + M]
-            return np.fft.ifft(np.fft.ifftshift(gh)).real * M
-        return self.interpolate(f, other.s)

@@ -1,4 +1,12 @@
-"""Closed-form circle spectra (Conventions and errata, section 4) shared by the spectra tests."""
+"""Closed-form spectra of circle equilibria, and one reference value of the paper's gauge.
+
+Provenance: linearizing the faceting and Canham-Helfrich flows about a circle of radius
+R in Fourier modes e^{ik theta} (the derivation of the Conventions and errata page,
+section 4): each mode k >= 1 is doubled (cos and sin), the k = 0 mode carries the
+perimeter penalty -2 pi beta / R, the k = 1 modes are the translations (zero).
+These formulas are written out independently of :func:`qsa.studies.circle_eigenvalues`
+so that the tests do not check the library against itself.
+"""
 
 import numpy as np
 
@@ -33,3 +41,11 @@ def helfrich_circle_eigenvalues(R, eps, beta, kmax):
     lam = -eps * (k**2 - 1.0) ** 2 / R**4
     lam[0] -= 2 * np.pi * beta / R
     return np.sort(np.concatenate([lam, lam[1:]]))[::-1], lam
+
+
+#: Largest eigenvalue of the paper's printed linearization (e:FOE-Lin, no multiplier
+#: term, ``gauge="paper"``) at the circle R = 1, alpha = 0.1, kstar = 5, beta = 5 on
+#: Fourier(65): a regression value, computed once with qsa's dense eigensolver when the
+#: test was written; the Conventions and errata page quotes it as ~3.4e3. The true
+#: spectrum there is <= 0.
+PAPER_GAUGE_MAX_EIGENVALUE = 3427.6133

@@ -1,41 +1,7 @@
-"""Parameter sweeps: map a study over a grid of parameters with any executor.
+"""Running a sweep: executors, the point files on disk, the results table, :func:`run_sweep`.
 
-A *study* is a picklable module-level function ``study(**params) -> dict`` (see
-:mod:`qsa.studies`). Its result maps names to scalars (``float``, ``int``,
-``bool``, ``str``; they become columns of the table) or arrays (stored per point).
-:func:`run_sweep` evaluates it at every point of a :class:`ParameterGrid` with a
-:class:`concurrent.futures.Executor` — a local :class:`~concurrent.futures.ProcessPoolExecutor`
-by default, a Dask cluster through ``distributed.Client(...).get_executor()``
-(:func:`dask_executor`, the optional extra ``qsa-interfaces[dask]``) or any other.
-
-Storage and resumption
-----------------------
-Every finished point is written by the calling process as ``points/<key>.npz``
-(its arrays; read back with ``allow_pickle=False``) and ``points/<key>.json``
-(parameters, scalar results, ``success``/``message``, run time, the SHA-256 of the
-npz). Both are written atomically (temporary file in the same directory, then
-``os.replace``) and the JSON last, so a point counts as finished only once both
-are complete: a sweep killed at any moment (even ``SIGKILL``) leaves finished
-points readable and re-running it computes only the missing ones. The table
-``results.csv`` (one row per grid point, in grid order) is rebuilt from the point
-files at the end of each run; it holds no timings, so the same sweep gives the
-same table on any executor.
-
-A point file that cannot be read back (truncated, not JSON, wrong SHA-256, other
-parameters than its key) is *recomputed* by default (with a :class:`SweepWarning`
-naming the file); ``on_corrupt="raise"`` raises ``ValueError`` naming it instead.
-A study that raises on a point is a *failed point* (``success=False`` and the
-exception text in ``message``); it is stored like any other and not retried.
-
-Workers never touch the output directory (the results travel back through the
-executor), so a cluster needs no shared file system. One sweep writes to a directory
-at a time: a new run removes the temporary files a killed one left behind.
-
-Examples
---------
->>> grid = ParameterGrid.parse(["alpha=0.1:0.2:3", "n_pulses=2,3"])
->>> len(grid), grid.points()[1]
-(6, {'alpha': 0.1, 'n_pulses': 3})
+:mod:`qsa.sweep` describes the storage and resumption; the grids are
+:mod:`qsa.sweep.grid`.
 """
 
 from __future__ import annotations
@@ -46,13 +12,10 @@ import csv
 import hashlib
 import inspect
 import io
-import itertools
 import json
-import math
 import multiprocessing as mp
 import os
 import sys
-import tempfile
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -61,20 +24,20 @@ from pathlib import Path
 import numpy as np
 
 from qsa._version import __version__
+from qsa.npz import write_atomically
+from qsa.sweep.grid import ParameterGrid, _python, _scalar, point_key
 
 __all__ = [
-    "ParameterGrid",
     "SweepResult",
     "SweepWarning",
     "SerialExecutor",
     "dask_executor",
-    "parse_param",
-    "point_key",
     "run_sweep",
     "read_table",
+    "load_point",
+    "STATUS_COLUMNS",
 ]
 
-_NAME_OK = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_")
 #: Columns every table has after the parameters.
 STATUS_COLUMNS = ("success", "message")
 
@@ -83,142 +46,6 @@ class SweepWarning(UserWarning):
     """A stored point could not be read back and is recomputed."""
 
 
-# ------------------------------------------------------------------ grid spec
-def _scalar(text: str):
-    """``"3"`` -> 3, ``"0.5"`` -> 0.5, ``"true"`` -> True, anything else -> the string."""
-    t = text.strip()
-    if t.lower() in ("true", "false"):
-        return t.lower() == "true"
-    for conv in (int, float):
-        try:
-            return conv(t)
-        except ValueError:
-            pass
-    return t
-
-
-def parse_param(spec: str):
-    """Parse one grid specification into ``(name, values)``.
-
-    Parameters
-    ----------
-    spec : str
-        ``"name=start:stop:num"`` (``num`` equally spaced floats, both ends
-        included, as :func:`numpy.linspace`), ``"name=v1,v2,..."`` (a list; ints stay
-        ints), or ``"name=v"`` (one value).
-
-    Returns
-    -------
-    name : str
-    values : list
-        Python scalars (``int``, ``float``, ``bool`` or ``str``).
-
-    Raises
-    ------
-    ValueError
-        Malformed spec; the message quotes it.
-
-    Examples
-    --------
-    >>> parse_param("alpha=0.05:0.3:6")
-    ('alpha', [0.05, 0.1, 0.15, 0.2, 0.25, 0.3])
-    >>> parse_param("N=2,3,4")
-    ('N', [2, 3, 4])
-    """
-    if not isinstance(spec, str) or "=" not in spec:
-        raise ValueError(f"param spec {spec!r}: expected NAME=start:stop:num or NAME=v1,v2,...")
-    name, _, rhs = spec.partition("=")
-    name = name.strip()
-    if not name or not set(name) <= _NAME_OK or name[0].isdigit():
-        raise ValueError(f"param spec {spec!r}: {name!r} is not a valid parameter name")
-    if not rhs.strip():
-        raise ValueError(f"param spec {spec!r}: no values")
-    if ":" in rhs:
-        parts = rhs.split(":")
-        if len(parts) != 3:
-            raise ValueError(f"param spec {spec!r}: a range is start:stop:num")
-        try:
-            start, stop = float(parts[0]), float(parts[1])
-            num = int(parts[2])
-        except ValueError:
-            raise ValueError(f"param spec {spec!r}: start and stop must be numbers and "
-                             "num an integer") from None
-        if num < 1 or not (math.isfinite(start) and math.isfinite(stop)):
-            raise ValueError(f"param spec {spec!r}: need finite ends and num >= 1")
-        # round away the last-bit noise of linspace so "0.1" reads back as 0.1
-        values = [float(f"{v:.12g}") for v in np.linspace(start, stop, num)]
-        return name, values
-    values = [_scalar(v) for v in rhs.split(",")]
-    if any(v == "" for v in values):
-        raise ValueError(f"param spec {spec!r}: empty value in the list")
-    return name, values
-
-
-@dataclass(frozen=True)
-class ParameterGrid:
-    """The Cartesian product of named value lists (the first name varies slowest).
-
-    Parameters
-    ----------
-    axes : tuple of (name, tuple of values)
-    """
-
-    axes: tuple
-
-    def __post_init__(self):
-        names = [n for n, _ in self.axes]
-        if len(set(names)) != len(names):
-            raise ValueError(f"params: a name is given twice in {names}")
-        for n, vals in self.axes:
-            if len(vals) == 0:
-                raise ValueError(f"params: {n!r} has no values")
-
-    @classmethod
-    def parse(cls, specs) -> ParameterGrid:
-        """Build from ``["alpha=0.05:0.3:11", "n_pulses=2,3"]`` (see :func:`parse_param`)."""
-        if isinstance(specs, str):
-            specs = [specs]
-        return cls(tuple((n, tuple(v)) for n, v in map(parse_param, specs)))
-
-    @classmethod
-    def from_dict(cls, params: dict) -> ParameterGrid:
-        """Build from ``{"alpha": [0.1, 0.2], "n_pulses": 3}`` (scalars become one value)."""
-        axes = []
-        for n, v in params.items():
-            vals = [v] if np.isscalar(v) else list(v)
-            axes.append((n, tuple(_python(x) for x in vals)))
-        return cls(tuple(axes))
-
-    @property
-    def names(self) -> list:
-        return [n for n, _ in self.axes]
-
-    def points(self) -> list:
-        """All points as dicts, in grid order."""
-        return [dict(zip(self.names, combo, strict=True))
-                for combo in itertools.product(*(v for _, v in self.axes))]
-
-    def __len__(self):
-        return math.prod(len(v) for _, v in self.axes)
-
-    def to_json(self) -> dict:
-        return {n: list(v) for n, v in self.axes}
-
-
-def _python(x):
-    """NumPy scalars -> Python scalars (JSON-able, picklable by value)."""
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
-
-
-def point_key(study_name: str, params: dict) -> str:
-    """Stable file key of a point: SHA-1 of the study name and its sorted parameters."""
-    text = json.dumps([study_name, sorted((k, _python(v)) for k, v in params.items())])
-    return hashlib.sha1(text.encode()).hexdigest()[:20]
-
-
-# ---------------------------------------------------------------- executors
 class SerialExecutor(cf.Executor):
     """Runs each task at submission, in the calling process (``workers=1``, debugging)."""
 
@@ -271,17 +98,7 @@ def dask_executor(address=None, n_workers=None, threads_per_worker=1):
 # ------------------------------------------------------------- point files
 def _atomic_write(path: Path, data: bytes):
     """Write ``data`` to ``path`` so that readers see the old file or the whole new one."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    write_atomically(path, lambda fh: fh.write(data))
 
 
 def _is_scalar(v) -> bool:
