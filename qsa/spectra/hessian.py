@@ -294,7 +294,8 @@ def lagrange_hessian(energy, curve: Curve, constraints=None, *, closure="auto") 
     # dense C_1, C_2 Hessians where the energy Hessian is a matrix anyway (small grids);
     # factored where it is factored or the grid is large
     dense = not curve.grid.sparse or (curve.N <= DENSE_CONSTRAINT_LIMIT
-                                      and not isinstance(H, ReducedHessian))
+                                      and not isinstance(H, ReducedHessian)
+                                      and use12)
     L = H
     if np.any(weights != 0.0):
         L = add_matrices(H, -closure_hessian(curve, weights, "dense" if dense else "auto"))
