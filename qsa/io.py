@@ -84,9 +84,13 @@ dtype (float64, complex128 eigenvalues, bool masks).
         ``"interrupted"``, ``"finished"``, ``"stopped"``, ``"failed"``,
         ``"max_steps"``), ``t_final``.
 
-The paper's runs (``qsa reproduce``) write ``<name>.npz`` with the arrays of
-their result's ``arrays()`` and its ``summary()`` as metadata (also in
-``<name>.json``); sweeps write one file per point. :func:`load_npz` reads them.
+``qsa.paper-run`` -- ``qsa reproduce facet|snowflake|folding --out DIR``
+    The arrays of the run's ``arrays()`` (per-step series ``t``, ``energy``,
+    ...; snapshots ``snap_t`` (m,), ``snap_x``, ``snap_y`` (m, N)) and its
+    ``summary()`` as metadata (also in ``<name>.json``), plus ``name``.
+    :func:`load` gives a :class:`PaperRunFile`.
+
+Sweeps write one file per point; :func:`load_npz` reads them.
 
 Examples
 --------
@@ -113,10 +117,18 @@ import os
 
 from qsa import _codecs
 from qsa._version import __version__
-from qsa.npz import json_default, load_npz, save_npz, write_atomically
+from qsa.npz import (
+    PaperRunFile,
+    is_paper_run,
+    json_default,
+    load_npz,
+    save_npz,
+    write_atomically,
+)
 
 __all__ = ["save_npz", "load_npz", "json_default", "write_atomically", "load",
-           "load_equilibrium", "save_equilibrium", "save_spectrum", "save_flow_result"]
+           "load_equilibrium", "save_equilibrium", "save_spectrum", "save_flow_result",
+           "PaperRunFile"]
 
 # ------------------------------------------------------------------ result files
 def save_equilibrium(path, equilibrium, extra_meta=None):
@@ -175,20 +187,26 @@ def load(path):
 
     Returns
     -------
-    Equilibrium, Spectrum or FlowResult
+    Equilibrium, Spectrum, FlowResult or PaperRunFile
         By the file's kind: ``qsa.equilibrium`` -> Equilibrium, ``qsa.spectrum``
         -> Spectrum (its equilibrium: :func:`load_equilibrium`),
         ``qsa.flow-result`` and ``qsa.flow-checkpoint`` -> FlowResult (a
-        checkpoint gives the run up to its time).
+        checkpoint gives the run up to its time), ``qsa.paper-run`` (a
+        ``qsa reproduce`` run's ``<name>.npz``) -> :class:`PaperRunFile`.
 
     Raises
     ------
     ValueError
         A missing or damaged file, or one whose kind has no result object (a
-        paper run, a sweep point: read those with :func:`load_npz`).
+        sweep point, a run's series: read those with :func:`load_npz`).
     """
     arrays, meta = load_npz(path)
     kind = meta.get("kind")
+    if is_paper_run(meta):
+        summary = {k: v for k, v in meta.items() if k not in ("kind", "name")}
+        name = meta.get("name", meta.get("scenario", os.path.splitext(os.path.basename(
+            os.fspath(path)))[0]))
+        return PaperRunFile(os.fspath(path), str(name), summary, arrays)
     try:
         if kind == _codecs.KIND_EQUILIBRIUM:
             return _codecs.decode_equilibrium(arrays, meta["equilibrium"])

@@ -24,10 +24,72 @@ import json
 import os
 import secrets
 import zipfile
+from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["save_npz", "load_npz", "json_default", "write_atomically"]
+__all__ = ["save_npz", "load_npz", "json_default", "write_atomically", "KIND_PAPER_RUN",
+           "PaperRunFile"]
+
+#: ``meta["kind"]`` of a paper run's ``<name>.npz`` (``qsa reproduce``).
+KIND_PAPER_RUN = "qsa.paper-run"
+
+
+@dataclass(frozen=True, eq=False)
+class PaperRunFile:
+    """A paper run's ``<name>.npz`` read back: its summary and its arrays.
+
+    The runs of ``qsa reproduce`` store what their printed summary and figures
+    need, not a whole flow, so this record gives them as they are, plus the
+    nodes of the run's last snapshot when the run stored them (``snap_x``,
+    ``snap_y``) -- the curve to polish or to take a spectrum of.
+
+    Attributes
+    ----------
+    path : str
+    name : str
+        The run's file stem (``"facet"``, ``"cha_rho1.5"``, ...).
+    summary : dict
+        The run's JSON summary (the same as ``<name>.json``).
+    arrays : dict of str to ndarray
+    """
+
+    path: str
+    name: str
+    summary: dict
+    arrays: dict = field(repr=False)
+
+    @property
+    def has_curve(self) -> bool:
+        """Whether the file holds the nodes of its snapshots."""
+        return "snap_x" in self.arrays and len(self.arrays["snap_x"]) > 0
+
+    def _snapshot(self, key):
+        if not self.has_curve:
+            raise ValueError(f"{self.path}: the run {self.name!r} stored no snapshot nodes "
+                             "(snap_x, snap_y); run it again with this version of qsa")
+        return np.asarray(self.arrays[key][-1], dtype=float)
+
+    @property
+    def x(self) -> np.ndarray:
+        """Nodes ``x`` of the last snapshot, shape (N,)."""
+        return self._snapshot("snap_x")
+
+    @property
+    def y(self) -> np.ndarray:
+        """Nodes ``y`` of the last snapshot, shape (N,)."""
+        return self._snapshot("snap_y")
+
+    @property
+    def t(self) -> float:
+        """Time of the last snapshot."""
+        return float(np.asarray(self.arrays["snap_t"])[-1])
+
+
+def is_paper_run(meta) -> bool:
+    """Whether metadata are a paper run's (its kind, or a summary written before kinds)."""
+    return meta.get("kind") == KIND_PAPER_RUN or ("kind" not in meta and "scenario" in meta)
+
 
 _META = "__meta__"
 

@@ -1,12 +1,14 @@
-"""``qsa flow cha|facet``: run a DAE curve flow and write its data and figures.
+"""``qsa flow cha|facet|fch``: run a DAE curve flow and write its data and figures.
 
 Examples
 --------
 ``qsa flow cha --N 100 --t-final 0.2 --tol 1e-4 --out run-cha``  (the appendix example)
 ``qsa flow facet --alpha 0.1 --kstar 5 --beta 5 --preferred-length 8 --shape wobbly --lobes 9``
 ``qsa flow cha --resume run-cha/checkpoint.npz --t-final 0.4``
+``qsa flow cha --resume --out run-cha --t-final 0.4``  (the same: the checkpoint in --out)
 ``qsa flow facet --init eq.npz --t-final 0.01``  (from ``qsa equilibrium ... --save eq.npz``)
 ``qsa flow facet --shape wobbly --lobes 7 --N 200 --t-final 0.02 --movie facet.gif``
+``qsa flow fch --alpha 0.2 --eta 0.5 --kstar 1 --t-final 0.5``  (a second-order energy)
 
 A resumed run takes its model, grid, method and tolerance from the checkpoint:
 options that contradict it are refused, options about the initial curve are
@@ -32,14 +34,15 @@ from qsa.commands._options import (
 MODEL_DEFAULTS = {
     "cha": {"eps": 0.1, "beta": 1.0, "rho": 1.5, "A0": 10.0, "l_star": 0.5, "a": 1.0},
     "facet": {"alpha": 0.1, "kstar": 5.0, "beta": 5.0, "L_star": None},
+    "fch": {"alpha": 0.2, "eta": 0.5, "kstar": 1.0, "beta": 1.0, "L_star": None},
 }
 #: Run options (dest -> default) shared by both models; ``t_final`` by model.
 RUN_DEFAULTS = {"N": 100, "tol": 1e-4, "method": "be"}
-T_FINAL = {"cha": 0.2, "facet": 1e-3}
+T_FINAL = {"cha": 0.2, "facet": 1e-3, "fch": 0.5}
 #: Options about the initial curve (ignored, with a warning, by ``--resume``).
 INITIAL_OPTIONS = ("init", "shape", "radius", "amp", "lobes")
 INITIAL_DEFAULTS = {"shape": "paper", "radius": 1.0, "amp": 0.05, "lobes": 5}
-_MODEL_NAMES = {"cha": "CHA", "facet": "FacetingFlow"}
+_MODEL_NAMES = {"cha": "CHA", "facet": "FacetingFlow", "fch": "SecondOrderFlow"}
 
 
 def add_parser(sub):
@@ -60,6 +63,21 @@ def add_parser(sub):
     _common(q, "cha")
     d = MODEL_DEFAULTS["facet"]
     q = models.add_parser("facet", help="the faceting flow (e:Facet-NV)")
+    _faceting_options(q, d, "default: the equilibrium's with --init EQ.npz, else 1.2 x the "
+                            "initial length")
+    _common(q, "facet")
+    d = MODEL_DEFAULTS["fch"]
+    q = models.add_parser("fch", help="the functionalized curvature energy (a second-order "
+                                      "energy) + length penalty")
+    q.add_argument("--eta", type=finite_float,
+                   help=f"functionalization parameter (default {d['eta']:g})")
+    _faceting_options(q, d, "default 1.2 x the initial length")
+    _common(q, "fch")
+    return p
+
+
+def _faceting_options(q, d, length_default):
+    """``--alpha --kstar --beta --preferred-length`` of the faceting-type models."""
     q.add_argument("--alpha", type=positive_float, help=f"front width (default {d['alpha']:g})")
     q.add_argument("--kstar", type=positive_float,
                    help=f"second well kappa* (default {d['kstar']:g})")
@@ -67,10 +85,7 @@ def add_parser(sub):
                    help=f"length penalty (default {d['beta']:g})")
     q.add_argument("--preferred-length", "--L-star", dest="L_star", metavar="LENGTH",
                    type=positive_float,
-                   help="preferred length L* of the length penalty (default: the "
-                        "equilibrium's with --init EQ.npz, else 1.2 x the initial length)")
-    _common(q, "facet")
-    return p
+                   help=f"preferred length L* of the length penalty ({length_default})")
 
 
 def _common(q, model):
@@ -87,7 +102,7 @@ def _common(q, model):
     q.add_argument("--init", metavar="FILE",
                    help="initial curve (overrides --shape): a text file of x y rows, or a "
                         "qsa file: an equilibrium or spectrum (--save), a flow result or "
-                        "checkpoint (its last state)")
+                        "checkpoint (its last state), a qsa reproduce run (its last snapshot)")
     q.add_argument("--N", type=int_at_least(8),
                    help=f"nodes (default {RUN_DEFAULTS['N']}; on --resume the checkpoint's)")
     q.add_argument("--t-final", type=positive_float,
@@ -104,8 +119,10 @@ def _common(q, model):
                    help="folder for result.npz, summary.json, flow.png and checkpoint.npz")
     q.add_argument("--checkpoint", metavar="FILE", default=None,
                    help="checkpoint file (default DIR/checkpoint.npz with --out)")
-    q.add_argument("--resume", default=None, metavar="CHECKPOINT",
-                   help="continue the run saved in CHECKPOINT")
+    q.add_argument("--resume", nargs="?", const=True, default=None, metavar="CHECKPOINT",
+                   help="continue the run saved in CHECKPOINT; without a file, the "
+                        "checkpoint of --out DIR (or --checkpoint FILE), as qsa reproduce "
+                        "does")
     q.add_argument("--progress", action=_bool_action(), default=None,
                    help="progress bar (default: only on a terminal)")
     q.add_argument("--no-plots", action="store_true", help="no figure in --out")
@@ -136,7 +153,8 @@ def read_initial_file(path):
     """Closed samples ``(x, y)`` and the equilibrium (or None) of an ``--init`` file.
 
     A qsa ``.npz`` file gives its curve (an equilibrium's or spectrum's) or its last
-    state (a flow result or checkpoint); any other file is read as text rows ``x y``.
+    state (a flow result or checkpoint, a paper run's last snapshot); any other
+    file is read as text rows ``x y``.
 
     Raises
     ------
@@ -148,7 +166,7 @@ def read_initial_file(path):
         magic = fh.read(4)
     if magic == b"PK\x03\x04":  # a zip archive: a qsa file
         from qsa.flows import FlowResult
-        from qsa.io import load, load_equilibrium, load_npz
+        from qsa.io import PaperRunFile, load, load_equilibrium, load_npz
 
         kind = load_npz(path)[1].get("kind", "")
         if kind in ("qsa.equilibrium", "qsa.spectrum"):
@@ -157,6 +175,8 @@ def read_initial_file(path):
             return (x, y), eq
         result = load(path)
         if isinstance(result, FlowResult):
+            return (result.x, result.y), None
+        if isinstance(result, PaperRunFile) and result.has_curve:
             return (result.x, result.y), None
         raise ValueError(f"--init {path}: a {kind} file holds no curve")
     try:
@@ -202,12 +222,18 @@ def build_model(args, xy, eq=None):
     For ``facet`` from an equilibrium file, alpha, kappa*, beta and L* default to
     the equilibrium's, so the flow starts at a (discrete) rest point.
     """
-    from qsa.flows import CHA, FacetingFlow
+    from qsa.energies import FunctionalizedCurvature, Perimeter
+    from qsa.flows import CHA, FacetingFlow, SecondOrderFlow
 
     values = {k: getattr(args, k) for k in MODEL_DEFAULTS[args.model]}
     if args.model == "cha":
         return CHA(**{k: MODEL_DEFAULTS["cha"][k] if v is None else v
                       for k, v in values.items()})
+    if args.model == "fch":
+        v = {k: MODEL_DEFAULTS["fch"][k] if x is None else x for k, x in values.items()}
+        L_star = 1.2 * _length(xy) if v["L_star"] is None else v["L_star"]
+        return SecondOrderFlow(FunctionalizedCurvature(v["alpha"], v["eta"], v["kstar"])
+                               + Perimeter(v["beta"], L_star))
     from_eq = dict(eq.params) if eq is not None else {}
     for k, v in values.items():
         if v is None:
@@ -218,6 +244,41 @@ def build_model(args, xy, eq=None):
 
 
 # ---------------------------------------------------------------------- resume
+def resume_file(args):
+    """The checkpoint a bare ``--resume`` continues: ``--checkpoint``, else ``DIR/checkpoint.npz``.
+
+    Raises
+    ------
+    ValueError
+        One line when neither ``--out`` nor ``--checkpoint`` says where it is, or
+        the file is missing.
+    """
+    from qsa.commands._options import check_input_file
+
+    if args.resume is not True:
+        return args.resume
+    if args.checkpoint is not None:
+        path = args.checkpoint
+    elif args.out:
+        path = os.path.join(args.out, "checkpoint.npz")
+    else:
+        raise ValueError("--resume: give the checkpoint (--resume FILE) or the run's "
+                         "folder (--resume --out DIR)")
+    check_input_file(path, "--resume")
+    return path
+
+
+def _saved_parameters(saved):
+    """The model parameters of a checkpoint's metadata, one flat dict (energy sums merged)."""
+    if "energy" not in saved:
+        return saved
+    energy = saved["energy"]
+    values = {}
+    for term in energy.get("terms", [energy]):
+        values.update({k: v for k, v in term.items() if k != "energy"})
+    return values
+
+
 def resume_plan(args):
     """Model, N, tol, method and t_final of ``--resume``, with the options checked.
 
@@ -238,7 +299,8 @@ def resume_plan(args):
         raise ValueError(f"--resume {path}: a checkpoint of a {saved.get('model')} flow; "
                          f"continue it with qsa flow {other} --resume {path}")
     t_saved = float(meta["integrator"]["t"])
-    checks = {k: saved.get(k) for k in MODEL_DEFAULTS[args.model]}
+    values = _saved_parameters(saved)
+    checks = {k: values.get(k) for k in MODEL_DEFAULTS[args.model]}
     checks.update({"N": int(arrays["x_setup"].size), "tol": meta["options"]["tol"],
                    "method": meta["options"]["method"]})
     for dest, value in checks.items():
@@ -289,6 +351,7 @@ def run(args):
         movie_writer(args.movie)
     snapshots = args.snapshots if args.snapshots is not None else (60 if args.movie else 6)
     if args.resume:
+        args.resume = resume_file(args)
         plan = resume_plan(args)
         model, N, tol, method, t_final = (plan[k] for k in ("model", "N", "tol", "method",
                                                              "t_final"))

@@ -8,9 +8,9 @@ import time
 
 import numpy as np
 
-from qsa.npz import json_default, load_npz, save_npz
+from qsa.npz import KIND_PAPER_RUN, json_default, load_npz, save_npz
 
-__all__ = ["write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
+__all__ = ["KIND_PAPER_RUN", "write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
 
 
 class _Summarised:
@@ -24,7 +24,8 @@ class _Summarised:
 def write_output(out, name, arrays, summary):
     """Write ``<out>/<name>.npz`` (atomic, no pickle) and ``<out>/<name>.json``; return paths."""
     os.makedirs(out, exist_ok=True)
-    npz = save_npz(os.path.join(out, f"{name}.npz"), arrays, summary)
+    npz = save_npz(os.path.join(out, f"{name}.npz"), arrays,
+                   {**summary, "kind": KIND_PAPER_RUN, "name": name})
     path = os.path.join(out, f"{name}.json")
     tmp = path + ".tmp"
     with open(tmp, "w") as fh:

@@ -312,4 +312,13 @@ class FacetRun(_Summarised):
             "snap_t": self.snap_t, "snap_states": self.snap_states,
             "snap_rotation_defect": np.array([m.rotation_defect for m in self.snapshots]),
             "snap_fronts": np.array([m.fronts for m in self.snapshots], dtype=float),
+            **self._snapshot_nodes(),
         }
+
+    def _snapshot_nodes(self):
+        """``snap_x``, ``snap_y`` (m, N): the nodes of each snapshot (empty without a system)."""
+        system = getattr(self.result, "system", None)
+        if system is None or not len(self.snap_states):
+            return {}
+        xy = [system.positions(y) for y in self.snap_states]
+        return {"snap_x": np.array([p[0] for p in xy]), "snap_y": np.array([p[1] for p in xy])}

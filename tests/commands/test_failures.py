@@ -156,6 +156,29 @@ def test_resume_warns_about_initial_curve_options(cha_checkpoint, tmp_path, caps
     assert s["N"] == 40 and s["t_final"] == 0.003 and s["tol"] == 1e-3
 
 
+def test_bare_resume_continues_the_checkpoint_in_out(cha_checkpoint, tmp_path, capsys):
+    import shutil
+
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    shutil.copy(cha_checkpoint, run_dir / "checkpoint.npz")
+    code, out, err = run(capsys, "flow", "cha", "--resume", "--out", run_dir, "--t-final",
+                         "0.003", "--no-progress", "--no-plots", "--json")
+    assert code == 0, err
+    s = json.loads(out)
+    assert s["N"] == 40 and s["t_final"] == 0.003
+    assert s["checkpoint"] == str(run_dir / "checkpoint.npz")
+
+
+def test_bare_resume_needs_a_folder_or_a_file(tmp_path, capsys):
+    code, _, err = run(capsys, "flow", "cha", "--resume", "--no-progress")
+    assert code == 2
+    assert_one_error_line(err, "--resume", "--resume FILE", "--out DIR")
+    code, _, err = run(capsys, "flow", "cha", "--resume", "--out", tmp_path, "--no-progress")
+    assert code == 2
+    assert_one_error_line(err, "--resume", "checkpoint.npz", "no such file")
+
+
 # ------------------------------------------------------------ bad numbers
 @pytest.mark.parametrize("value", ["0", "-3", "1.5"])
 def test_snapshots_must_be_at_least_two(value, capsys):

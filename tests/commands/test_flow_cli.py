@@ -84,3 +84,38 @@ def test_reproduce_timesteps_matches_the_paper(capsys):
     for tol, steps in paper.items():
         assert abs(s["be"][f"{tol:g}"]["n_steps"] / steps - 1) <= 0.15
     assert abs(s["growth_per_decade"]["be"] / np.sqrt(10) - 1) <= 0.2
+
+
+def test_flow_fch_is_the_second_order_flow_of_the_options(tmp_path, capsys):
+    from qsa.energies import FunctionalizedCurvature, Perimeter
+    from qsa.flows import SecondOrderFlow, solve_flow
+    from qsa.io import load as load_result
+
+    out = tmp_path / "run"
+    argv = ["flow", "fch", "--alpha", "0.25", "--eta", "0.4", "--kstar", "1.2", "--beta", "2",
+            "--preferred-length", "7", "--shape", "wobbly", "--lobes", "3", "--amp", "0.1",
+            "--N", "40", "--tol", "1e-3", "--no-progress", "--no-plots", "--json"]
+    assert main(argv + ["--t-final", "0.05", "--out", str(out)]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["success"] and summary["model"]["model"] == "SecondOrderFlow"
+    terms = summary["model"]["energy"]["terms"]
+    assert terms[0] == {"energy": "FunctionalizedCurvature", "alpha": 0.25, "eta": 0.4,
+                        "kstar": 1.2}
+    assert terms[1] == {"energy": "Perimeter", "beta": 2.0, "L_star": 7.0}
+    # the same flow called from Python gives the same numbers
+    th = 2 * np.pi * np.arange(4000) / 4000
+    r = 1 + 0.1 * np.cos(3 * th)
+    model = SecondOrderFlow(FunctionalizedCurvature(0.25, 0.4, 1.2) + Perimeter(2.0, 7.0))
+    res = solve_flow(model, (r * np.cos(th), r * np.sin(th)), 0.05, N=40, tol=1e-3,
+                     t_eval=np.linspace(0.0, 0.05, 6))
+    assert summary["energy_final"] == pytest.approx(float(res.energy_steps[-1]), rel=1e-10)
+    assert summary["energy_final"] < summary["energy_initial"]
+    saved = load_result(out / "result.npz")
+    assert saved.system.metadata()["energy"]["terms"] == terms
+    # a resumed run keeps the model and continues from the checkpoint in --out
+    assert main(["flow", "fch", "--resume", "--out", str(out), "--eta", "0.5"]) == 2
+    assert "--eta 0.5" in capsys.readouterr().err
+    assert main(["flow", "fch", "--resume", "--out", str(out), "--t-final", "0.1",
+                 "--no-progress", "--no-plots", "--json"]) == 0
+    resumed = json.loads(capsys.readouterr().out)
+    assert resumed["t_final"] == 0.1 and resumed["n_steps"] > summary["n_steps"]

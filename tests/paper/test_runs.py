@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+import qsa.io as qsa_io
 from qsa.commands._simulations import cha_lines
 from qsa.curve import polygon_self_intersects
 from qsa.io import load_npz
@@ -48,6 +49,12 @@ def test_facet_short_run_writes_outputs_and_resumes(tmp_path):
     assert summary["params"]["alpha"] == 0.1 and summary["params"]["N"] == 600
     arrays, _ = load_npz(tmp_path / "facet.npz")
     assert arrays["t"].size == arrays["fronts"].size == arrays["energy"].size
+    # the file reads back as a paper run whose last snapshot is the run's final curve
+    back = qsa_io.load(tmp_path / "facet.npz")
+    assert isinstance(back, qsa_io.PaperRunFile) and back.name == "facet"
+    assert back.summary["n_steps"] == summary["n_steps"] and back.t == pytest.approx(3e-5)
+    xf, yf = out.result.system.positions(out.result.states[-1])
+    assert np.array_equal(back.x, xf) and np.array_equal(back.y, yf)
     # resume to a later time continues the series without restarting
     n_before = arrays["t"].size
     more = run_facet(FacetScenario(t_final=4e-5), str(tmp_path), resume=True,
@@ -70,6 +77,14 @@ def test_cha_short_run_monitors_and_writes(tmp_path):
     assert name == "cha_rho1.3_lstar0.05"  # another l* than Table T1's: its own files
     for suffix in (".npz", ".json", "_checkpoint.npz", "_series.npz"):
         assert (tmp_path / f"{name}{suffix}").is_file()
+    back = qsa_io.load(tmp_path / f"{name}.npz")
+    assert isinstance(back, qsa_io.PaperRunFile) and back.name == name and back.has_curve
+    assert back.summary["energy_final"] == out.summary()["energy_final"]
+    assert np.array_equal(back.x, out.snap_x[-1]) and np.array_equal(back.y, out.snap_y[-1])
+    from qsa.commands.flow import read_initial_file  # qsa flow --init RUN.npz
+
+    (xi, yi), eq = read_initial_file(str(tmp_path / f"{name}.npz"))
+    assert eq is None and np.array_equal(xi, back.x) and np.array_equal(yi, back.y)
     # length constraint: equal chords L/N, to the Newton tolerance 1e-3 tol = 1e-7
     x, y = out.result.x, out.result.y
     assert np.ptp(chords(x, y)) < 1e-6
