@@ -2,7 +2,7 @@
 against the dense reference algorithm (dense Jacobian + dense LU + full Newton, as in the
 code behind the paper).
 
-Targets (issue 5): the appendix example (N = 100, tol 1e-4, physical t = 0.2) in <= 1.5 s
+Targets: the appendix example (N = 100, tol 1e-4, physical t = 0.2) in <= 1.5 s
 and N = 400 in <= 15 s; fitted exponent of the cost per step <= 1.15 for faceting
 (N = 1e2 .. 1e5) and <= 1.3 for CHA with the neighbour list (N = 1e2 .. 1e4).
 

@@ -1,4 +1,4 @@
-"""Cost of the foundation operators against N (issue: foundation performance).
+"""Cost of the foundation operators against N (the foundation's performance targets).
 
 Prints, for finite differences (sparse, N = 1e3 ... 1e6) and Fourier (dense,
 N = 63 ... 1023), the wall time to build M, M M-dagger, the faceting + perimeter

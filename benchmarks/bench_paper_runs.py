@@ -1,4 +1,4 @@
-"""Wall time of the paper's full-scale simulations (issue 6 targets: facet <= 10 min,
+"""Wall time of the paper's full-scale simulations (targets: facet <= 10 min,
 each CHA run <= 20 min on 2 cores).
 
 Prints one table row per run: final time, nodes, accepted steps, wall seconds
