@@ -226,14 +226,14 @@ def build_model(args, xy, eq=None):
     from qsa.flows import CHA, FacetingFlow, SecondOrderFlow
 
     values = {k: getattr(args, k) for k in MODEL_DEFAULTS[args.model]}
+    given = {k: MODEL_DEFAULTS[args.model][k] if v is None else v for k, v in values.items()}
     if args.model == "cha":
-        return CHA(**{k: MODEL_DEFAULTS["cha"][k] if v is None else v
-                      for k, v in values.items()})
+        return CHA(**given)
     if args.model == "fch":
-        v = {k: MODEL_DEFAULTS["fch"][k] if x is None else x for k, x in values.items()}
-        L_star = 1.2 * _length(xy) if v["L_star"] is None else v["L_star"]
-        return SecondOrderFlow(FunctionalizedCurvature(v["alpha"], v["eta"], v["kstar"])
-                               + Perimeter(v["beta"], L_star))
+        L_star = 1.2 * _length(xy) if given["L_star"] is None else given["L_star"]
+        return SecondOrderFlow(FunctionalizedCurvature(given["alpha"], given["eta"],
+                                                       given["kstar"])
+                               + Perimeter(given["beta"], L_star))
     from_eq = dict(eq.params) if eq is not None else {}
     for k, v in values.items():
         if v is None:

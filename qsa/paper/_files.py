@@ -10,7 +10,7 @@ import numpy as np
 
 from qsa.npz import KIND_PAPER_RUN, json_default, load_npz, save_npz
 
-__all__ = ["KIND_PAPER_RUN", "write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
+__all__ = ["write_output", "Series", "checkpoint_time", "checkpoint_nodes"]
 
 
 class _Summarised:
