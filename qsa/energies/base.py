@@ -218,6 +218,28 @@ class Energy(ABC):
         True
         """
 
+
+    def factored_hessian(self, c: Curve):
+        """``nabla_I^2 E`` in the form spectral solvers want: high-order blocks as factors.
+
+        Equal to :meth:`hessian` as an operator. Energies whose Hessian has blocks of
+        order 4 (second-order densities, :class:`~qsa.energies.SecondOrderEnergy`) return,
+        on finite-difference grids, a :class:`~qsa.linalg.ReducedHessian`
+        ``S + Lf B Rf`` holding those blocks as their order-2 factors: formed, the
+        rounding of their ``h^-4`` entries adds up coherently and limits the slow
+        eigenvalues at large ``N`` (:mod:`qsa.spectra.factored` solves with the factors).
+        The default is :meth:`hessian`.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        matrix, shape (2N, 2N)
+            As :meth:`hessian`, or a :class:`~qsa.linalg.ReducedHessian`.
+        """
+        return self.hessian(c)
     def normal_velocity(self, c: Curve) -> np.ndarray:
         """Outward normal velocity ``V^n = -G d_kappa E - kappa (g d_g E)`` (e:L2grad).
 
@@ -353,6 +375,12 @@ class EnergySum(Energy):
         H = self.parts[0].hessian(c)
         for e in self.parts[1:]:
             H = add_matrices(H, e.hessian(c))
+        return H
+
+    def factored_hessian(self, c):
+        H = self.parts[0].factored_hessian(c)
+        for e in self.parts[1:]:
+            H = add_matrices(H, e.factored_hessian(c))
         return H
 
     def gradient_parts(self, c):

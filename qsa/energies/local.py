@@ -35,6 +35,7 @@ import scipy.sparse as sp
 from qsa._checks import real_number
 from qsa.curve import Curve
 from qsa.energies.base import Energy
+from qsa.linalg import ReducedHessian
 
 __all__ = ["Density", "LocalEnergy", "FirstOrderEnergy"]
 
@@ -291,6 +292,56 @@ class LocalEnergy(Energy):
         if c.grid.sparse:
             return (sp.diags(winv) @ H).tocsr()
         return H * winv[:, None]
+
+    def factored_hessian(self, c):
+        """:meth:`hessian` with the order-4 blocks of second-order densities kept factored.
+
+        On finite-difference grids, when a density provides
+        ``euclidean_hessian_parts`` (``H_rest + T2^T B2 T2``,
+        :class:`~qsa.energies.second_order.SecondOrderDensity`), the result is the
+        :class:`~qsa.linalg.ReducedHessian` ``W^-1 (H_rest + T^T B T)`` with no implicit
+        state (``T`` the stacked ``T2``, ``B`` their block-diagonal ``B2``,
+        ``W = diag(dsigma, dsigma)``); otherwise :meth:`hessian`.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        sparse CSR matrix, ndarray or ReducedHessian, shape (2N, 2N)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, FiniteDifference
+        >>> from qsa.energies import FunctionalizedCurvature
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), FiniteDifference(48))
+        >>> E = FunctionalizedCurvature(0.1, 8.0, kstar=4.0)
+        >>> H = E.factored_hessian(c)
+        >>> type(H).__name__, bool(np.allclose(H.toarray(), E.hessian(c).toarray()))
+        ('ReducedHessian', True)
+        """
+        if not c.grid.sparse or not any(hasattr(t, "euclidean_hessian_parts")
+                                        for t in self.densities()):
+            return self.hessian(c)
+        rest, Ts, Bs = None, [], []
+        for t in self.densities():
+            if hasattr(t, "euclidean_hessian_parts"):
+                H, T2, B2 = t.euclidean_hessian_parts(c)
+                Ts.append(T2)
+                Bs.append(B2)
+            else:
+                H = t.euclidean_hessian(c)
+            rest = H if rest is None else rest + H
+        ds = c.dsigma
+        winv = sp.diags(1.0 / np.concatenate([ds, ds]))
+        T = sp.vstack(Ts).tocsr()
+        p = T.shape[0]
+        empty = sp.csr_matrix((0, p))
+        return ReducedHessian(sp.block_diag(Bs, format="csr"), empty, sp.csr_matrix((0, 0)),
+                              sp.csr_matrix((0, 0)), empty, left=(winv @ T.T).tocsr(), right=T,
+                              S=(winv @ rest).tocsr())
 
     def gradient_parts(self, c):
         """``nabla_I`` of each density term separately, in ``<f, h> = int f h dsigma``.

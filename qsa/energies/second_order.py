@@ -359,6 +359,46 @@ class SecondOrderDensity:
         (Fourier), shape (2N, 2N)
             Symmetric: ``d^2/d delta^2 E(U + delta U1) = U1^T H U1``.
         """
+        rest, T2, B2 = self.euclidean_hessian_parts(c)
+        H = T2.T @ (B2 @ T2)
+        if c.grid.sparse:
+            return (rest + H).tocsr()
+        return rest + H
+
+    def euclidean_hessian_parts(self, c: Curve):
+        """``(H_rest, T2, B2)`` with ``euclidean_hessian(c) = H_rest + T2^T B2 T2``.
+
+        ``T2`` holds the rows ``Q`` and ``P`` of the evaluation points' Jacobian ``T``
+        (``Delta_s kappa`` and ``nabla_s kappa``: of order 2 and 1) and ``B2`` the
+        weighted second derivatives ``w gamma F_qq, F_qp, F_pp`` as a 2 x 2 block of
+        diagonals; ``H_rest`` (the other rows of ``T``, and ``X_p, X_q``) is of
+        order 2. The product ``T2^T B2 T2`` is of order 4: formed, its entries are of
+        size ``h^-4`` and their rounding adds up coherently over a row, so spectral
+        solvers keep it as these factors (:meth:`LocalEnergy.factored_hessian`).
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        H_rest : sparse CSR matrix or ndarray, shape (2N, 2N)
+            Symmetric.
+        T2 : sparse CSR matrix or ndarray, shape (2N, 2N)
+        B2 : sparse CSR matrix or ndarray, shape (2N, 2N)
+            Symmetric (diagonal blocks).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from qsa import Curve, FiniteDifference
+        >>> from qsa.energies import FunctionalizedCurvature
+        >>> c = Curve.polar(lambda t: 1 + 0.1 * np.cos(3 * t), FiniteDifference(64))
+        >>> d = FunctionalizedCurvature(0.1, 8.0, kstar=4.0).densities()[0]
+        >>> rest, T2, B2 = d.euclidean_hessian_parts(c)
+        >>> bool(abs(rest + T2.T @ B2 @ T2 - d.euclidean_hessian(c)).max() < 1e-8 * abs(rest).max())
+        True
+        """
         grid = c.grid
         m = _maps(c, self.placement)
         pts = (m.Q, m.P, m.K)
@@ -378,11 +418,15 @@ class SecondOrderDensity:
         Qrow, Prow = _apply(m.L_Q, Jq), _apply(m.L_P, Jp)  # rows Q and P of T
         w, wg = m.w, m.w * m.gam
         LK, Lg = m.L_K, m.L_g
-        # T^T B T over the rows (Q, P): one product of (2N x 2N) matrices
+        # the rows (Q, P) of T and their 2 x 2 block of weighted second derivatives
         T2 = vstack([Qrow, Prow])
-        BT2 = vstack([grid.scale_rows(wg * fqq, Qrow) + grid.scale_rows(wg * fqp, Prow),
-                      grid.scale_rows(wg * fqp, Qrow) + grid.scale_rows(wg * fpp, Prow)])
-        H = T2.T @ BT2
+        if grid.sparse:
+            T2 = T2.tocsr()
+            B2 = sp.bmat([[sp.diags(wg * fqq), sp.diags(wg * fqp)],
+                          [sp.diags(wg * fqp), sp.diags(wg * fpp)]], format="csr")
+        else:
+            B2 = np.block([[np.diag(wg * fqq), np.diag(wg * fqp)],
+                           [np.diag(wg * fqp), np.diag(wg * fpp)]])
         # the rows R_K (kappa) and R_gamma (g) against (Q, P), and the second-order terms
         # X_p, X_q: Y collects them and enters as Y + Y^T
         YK = S(LK, wg * fqk, Qrow) + S(LK, wg * fpk, Prow)
@@ -390,12 +434,13 @@ class SecondOrderDensity:
               + hstack([S(Lg, w * fk, LK), grid.diag(np.zeros(c.N))]))
         Y = vstack([YK, Yg])
         KK = S(LK, wg * fkk, LK)
-        H = H + Y + Y.T
+        rest = Y + Y.T
         if grid.sparse:
             Z = sp.csr_matrix((c.N, c.N))
-            return (H + sp.bmat([[KK, Z], [Z, Z]])).tocsr()
-        H[: c.N, : c.N] += KK
-        return H
+            return (rest + sp.bmat([[KK, Z], [Z, Z]])).tocsr(), T2, B2
+        rest = np.array(rest)
+        rest[: c.N, : c.N] += KK
+        return rest, T2, B2
 
 
 @dataclass(frozen=True)

@@ -241,6 +241,8 @@ class ReducedHessian:
 
     # -------------------------------------------------------------- products
     def _solve_cY(self, b, trans="N"):
+        if self.cY.shape[0] == 0:  # no implicit state: H = S0 + Lf Luu Rf
+            return np.zeros((0,) + np.shape(b)[1:])
         if self._lu is None:
             cY = self.cY.tocsc()
             if sp.triu(cY, 1).nnz == 0:  # lower triangular: natural order, no fill
@@ -366,6 +368,11 @@ class ReducedHessian:
                       [self.cU, self.cY, None]]
             return sp.bmat(blocks, format="csc")
         Ip = sp.identity(p, format="csr")
+        if self.cY.shape[0] == 0:  # no implicit state: rows x, u, v only
+            blocks = [[self.S - sigma * B, None, self.left],
+                      [self.right, -Ip, None],
+                      [None, self.Luu, -Ip]]
+            return sp.bmat(blocks, format="csc")
         blocks = [
             [self.S - sigma * B, None, None, None, self.left],
             [self.right, -Ip, None, None, None],

@@ -48,10 +48,15 @@ Error estimates (absolute, per eigenvalue ``lambda`` with ``<.,.>``-unit eigenve
   (self-adjoint in ``<.,.>``: an eigenvalue of ``K`` lies within ``r`` of ``nu``),
   plus the solve's own forward error ``d`` (the size of the iterative-refinement
   correction): ``|lambda - lambda_true| <= (r + d) / (|nu| (|nu| - r - d))``;
-* the rounding of the factors' entries (relative ``eps`` each, independent): the
-  first-order change of ``lambda = -(M1 phi)^T H (M1 phi)`` has standard deviation
-  ``eps / sqrt(3) * sqrt(sum_ij (H_ij psi_i psi_j)^2 + 4 sum_i chi_i^2 sum_j (M1_ij phi_j)^2)``
-  with ``psi = M1 phi``, ``chi = H psi``; three standard deviations are added.
+* the rounding of the factors' entries (relative ``eps`` each): the first-order
+  change of ``lambda = -(M1 phi)^T H (M1 phi)`` is bounded by
+  ``eps (sum_ij |H_ij psi_i psi_j| + 2 sum_ij |chi_i M1_ij phi_j|)`` with
+  ``psi = M1 phi``, ``chi = H psi`` (and the same sums over the factors of the
+  implicit-state part). A worst-case sum, not a statistical one: on uniform grids
+  every row holds the same stencil values, rounded the same way, so the errors add up
+  coherently over the ``N`` rows. ``chi`` is taken from the solve's own unknowns;
+  formed as a product it would carry the rounding noise of the computed eigenvector's
+  rough modes, amplified like ``h^-6``.
 """
 
 from __future__ import annotations
@@ -80,13 +85,6 @@ def _split(L):
     if isinstance(L, SparsePlusLowRank):
         return L.S, L.U, L.V, None
     return L, np.zeros((n, 0)), np.zeros((n, 0)), None
-
-
-def _square(A):
-    """Entrywise square (same matrix type)."""
-    if sp.issparse(A):
-        return A.multiply(A).tocsr()
-    return np.asarray(A) ** 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -277,11 +275,21 @@ class FactoredNormalOperator:
         return vals, vecs, self.rounding_error(vecs) + _EPS * np.abs(vals)
 
     # ------------------------------------------------------ rounding estimate
-    def rounding_error(self, phi):
-        """Three standard deviations of the change of ``phi^T W J phi`` from rounding the factors.
+    def rounding_error(self, phi, chi=None):
+        """A first-order bound on the change of ``phi^T W J phi`` from rounding the factors.
 
         ``phi`` has unit ``<.,.>`` norm (columns of an (N, k) array are treated
         separately). See the module docstring.
+
+        Parameters
+        ----------
+        phi : ndarray, shape (N,) or (N, k)
+        chi : ndarray, shape (2N, k), optional
+            ``(W2 L) M1 phi``. By default it is computed by products; a computed
+            eigenvector carries rounding noise of relative size ``eps`` in its rough
+            modes, which these products amplify like ``h^-6`` (``h^-8`` with a
+            second-order energy), so solvers pass the ``chi`` of their own solve
+            (:meth:`ShiftInvert.errors`), which is smooth.
 
         Returns
         -------
@@ -289,36 +297,34 @@ class FactoredNormalOperator:
         """
         phi = np.asarray(phi, dtype=float).reshape(self.N, -1)
         psi = self.normal_map(phi)
-        chi = self.weighted_hessian(psi)
-        H2 = _square(self.H)
-        N = self.N
-        G2 = _square(self.G)
-        M1phi2 = np.concatenate([G2 @ phi**2, (self.gk[:, None] * phi) ** 2], axis=0)
-        a = np.sum(psi**2 * (H2 @ psi**2), axis=0)
-        b = 4.0 * np.sum(chi**2 * M1phi2, axis=0)
+        chi = self.weighted_hessian(psi) if chi is None else np.asarray(chi).reshape(2 * self.N, -1)
+        apsi, aphi = np.abs(psi), np.abs(phi)
+        M1phi = np.concatenate([abs(self.G) @ aphi, np.abs(self.gk[:, None] * phi)], axis=0)
+        total = np.sum(apsi * (abs(self.H) @ apsi), axis=0) + 2.0 * np.sum(np.abs(chi) * M1phi,
+                                                                          axis=0)
         if self.reduced is not None:
-            a = a + _reduced_rounding(self.reduced, psi)
-        del N
-        return 3.0 * _EPS / np.sqrt(3.0) * np.sqrt(a + b)
+            total = total + _reduced_rounding(self.reduced, psi)
+        return _EPS * total
 
 
 def _reduced_rounding(K, psi):
-    """``sum (entry x products)^2`` of the reduced quadratic form ``psi^T Lf K Rf psi``.
+    """``sum |entry x products|`` of the reduced quadratic form ``psi^T Lf K Rf psi``.
 
     With ``u = Rf psi``, ``z = Z u`` and ``l = Lf^T psi`` (columns separately), the form
-    is ``l^T (Luu u + Lyu^T z) + (Z^T l)^T (Lyu u + Lyy z)``; each sparse factor's entries
-    are rounded independently (relative eps).
+    is ``l^T (Luu u + Lyu^T z) + (Z^T l)^T (Lyu u + Lyy z)``; every sparse factor's
+    entries carry a relative rounding of at most ``eps``, those of ``Rf`` and ``Lf``
+    included (``(K l)_i Rf_ij psi_j`` and ``(K u)_i Lf_ji psi_j``).
     """
     u = K.right @ psi
     l = K.left.T @ psi
     z = -K._solve_cY(K.cU @ u)
     zl = -K._solve_cY(K.cU @ l)
-    sq = lambda A: A.multiply(A).tocsr()
-    out = (np.sum(l**2 * (sq(K.Luu) @ u**2), axis=0)
-           + np.sum(l**2 * (sq(K.Lyu.T) @ z**2), axis=0)
-           + np.sum(zl**2 * (sq(K.Lyu) @ u**2), axis=0)
-           + np.sum(zl**2 * (sq(K.Lyy) @ z**2), axis=0))
-    return out
+    al, au, az, azl = np.abs(l), np.abs(u), np.abs(z), np.abs(zl)
+    out = (np.sum(al * (abs(K.Luu) @ au), axis=0) + np.sum(al * (abs(K.Lyu.T) @ az), axis=0)
+           + np.sum(azl * (abs(K.Lyu) @ au), axis=0) + np.sum(azl * (abs(K.Lyy) @ az), axis=0))
+    apsi = np.abs(psi)
+    return (out + np.sum(np.abs(K.core_matvec(l)) * (abs(K.right) @ apsi), axis=0)
+            + np.sum(np.abs(K.core_matvec(u)) * (abs(K.left.T) @ apsi), axis=0))
 
 
 @dataclass(frozen=True)
@@ -360,10 +366,14 @@ def _with_implicit_state(blocks, K, dgk, N):
     out[0][4] = -(dgk @ Lg)
     out[1][4] = -Lk
     out.append([-(Rg @ dgk), -Rk, None, Ip, None, None, None])
+    if q == 0:  # no implicit state (factored second-order blocks): v = Luu u
+        out[-1] = out[-1][:5]
+        out = [row[:5] for row in out]
+        out.append([None, None, None, K.Luu, -Ip])
+        return out
     out.append([None, None, None, K.Luu, -Ip, K.Lyu.T, K.cU.T])
     out.append([None, None, None, K.Lyu, None, K.Lyy, K.cY.T])
     out.append([None, None, None, K.cU, None, K.cY, None])
-    del q
     return out
 
 
@@ -534,7 +544,28 @@ class ShiftInvert:
             dx = lu.solve(self._residual(rhs, x, p))
             w = self.op.w if b.ndim == 1 else self.op.w[:, None]
             self.last_correction = np.sqrt(np.sum(w * dx[:N] ** 2, axis=0))
+        self._last_core = x[: self._core.shape[0]]
         return x[:N]
+
+    def _solution_chi(self):
+        """``chi = (W2 L) psi_full`` of the last solve, from its own unknowns.
+
+        The ``kappa`` rows are an unknown of the bordered system; the ``g`` rows follow
+        from the solved ``psi`` (and the implicit state's ``v``) by order-2 products, so
+        neither carries the amplified rounding noise of a product ``H M1 phi``.
+        """
+        op = self.op
+        N = op.N
+        x = self._last_core.reshape(self._last_core.shape[0], -1)
+        phi, psi, chik = x[:N], x[N:2 * N], x[2 * N:3 * N]
+        psi_full = np.concatenate([psi, op.gk[:, None] * phi], axis=0)
+        chig = op.H[N:] @ psi_full
+        if op.reduced is not None:
+            p = op.reduced.Luu.shape[0]
+            chig = chig + op.reduced.left[N:] @ x[3 * N + p:3 * N + 2 * p]
+        if op.rank:
+            chig = chig + op.U[N:] @ (op.V.T @ psi_full)
+        return np.concatenate([chik, chig], axis=0)
 
     def solve(self, b, refine=1, estimate=False):
         """``phi`` with ``(W J - sigma W) phi + W [Rc; R]^T mu = b``, ``[Rc; R] W phi = 0``.
@@ -585,12 +616,13 @@ class ShiftInvert:
         nu, Q = np.linalg.eigh(0.5 * (A + A.T))
         vecs = R.T @ Q
         KX = self.solve_free(w[:, None] * vecs, estimate=True)
+        chi = self._solution_chi() / nu[None, :]
         vals = self.sigma + 1.0 / nu
         res = KX - nu[None, :] * vecs
         rn = np.sqrt(np.sum(w[:, None] * res**2, axis=0)) + self.last_correction
         den = np.abs(nu) * (np.abs(nu) - rn)
         err = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
-        err = err + self.op.rounding_error(vecs) + _EPS * np.abs(vals)
+        err = err + self.op.rounding_error(vecs, chi) + _EPS * np.abs(vals)
         return vals, vecs, err
 
     def operator(self):
@@ -615,8 +647,9 @@ class ShiftInvert:
         lam = np.asarray(eigenvalues, dtype=float)
         nu = 1.0 / (lam - self.sigma)
         r = self.solve(w[:, None] * vectors, estimate=True) - nu[None, :] * vectors
+        chi = self._solution_chi() / nu[None, :]
         rn = np.sqrt(np.sum(w[:, None] * r * r, axis=0)) + self.last_correction
         den = np.abs(nu) * (np.abs(nu) - rn)
         res = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
-        rnd = self.op.rounding_error(vectors)
+        rnd = self.op.rounding_error(vectors, chi)
         return EigenErrors(res, rnd, res + rnd + _EPS * np.abs(lam))

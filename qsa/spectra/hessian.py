@@ -272,7 +272,7 @@ def lagrange_hessian(energy, curve: Curve, constraints=None, *, closure="auto") 
         raise ValueError(f"closure (formerly constraints=) must be 'auto', 'all' or 'curvature', "
                          f"got {closure!r}")
     cons = bind_constraints(constraints, curve)
-    H = energy.hessian(curve)
+    H = energy.factored_hessian(curve)
     grad = energy.gradient(curve)
     Lam = multipliers(energy, curve, gradient=grad, constraints=cons)
     Lam, mu = Lam[:3], Lam[3:]

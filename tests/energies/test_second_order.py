@@ -51,6 +51,20 @@ def test_hessian_is_second_derivative_and_self_adjoint(ename, gname):
     assert_hessian_matches_energy(ENERGIES[ename], c, directions(GRIDS[gname], 2))
 
 
+@pytest.mark.parametrize("gname", GRIDS)
+@pytest.mark.parametrize("ename", ENERGIES)
+def test_factored_hessian_is_the_hessian(ename, gname):
+    """``factored_hessian`` (order-4 blocks kept as ``T^T B T``) is the same operator."""
+    E, grid = ENERGIES[ename], GRIDS[gname]
+    c = off_manifold(grid, seed=5)
+    F = E.factored_hessian(c)
+    H = to_dense(E.hessian(c))
+    assert type(F).__name__ == ("ReducedHessian" if grid.sparse else type(E.hessian(c)).__name__)
+    assert np.abs(to_dense(F) - H).max() <= 1e-10 * np.abs(H).max()
+    X = np.array(directions(grid, 3)).T
+    assert np.allclose(F @ X, H @ X, rtol=0, atol=1e-10 * np.abs(H).max())
+
+
 def test_fd_hessian_is_banded_and_sparse():
     """Every block couples nodes at most two apart: O(N) storage and assembly."""
     c = skew_curve(FiniteDifference(128))
