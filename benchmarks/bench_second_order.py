@@ -8,7 +8,12 @@ the cost should be O(N); the script prints the exponent p of a least-squares fit
   faceting densities), and
 * ``SecondOrderEnergy(F, dF, d2F)`` with one density that couples q, p and k,
 
-next to ``Faceting`` for scale. A short Fourier table (dense, O(N^3)) follows.
+next to ``Faceting`` for scale. A short Fourier table (dense, O(N^3)) follows, then the
+slow eigenvalues of the critical circle of ``FunctionalizedCurvature(0.1, 8.8, 4)``
+(R = 1/kstar) on finite differences up to N = 64000: the unstable k = 2 pair and the
+breathing mode against the closed form (:meth:`~qsa.energies.SecondOrderEnergy.circle_eigenvalues`),
+with the reported error estimate and the fitted order; the order-4 Hessian block is
+kept factored in the solve, so the difference is the discretization's ``h^2`` term.
 Times are CPU times of this process (single-threaded BLAS), best of several repeats;
 on a shared machine they are noisy, the exponent less so.
 
@@ -89,6 +94,33 @@ def run_fourier(Ns, repeats):
         print(f"{N:>6} " + " ".join(f"{1e3 * t:>22.2f} ms" for t in row))
 
 
+def run_spectra(Ns):
+    from qsa.spectra import spectrum
+
+    E = FunctionalizedCurvature(alpha=0.1, eta=8.8, kstar=4.0)
+    R = 0.25
+    lam = E.circle_eigenvalues(R, 2)
+    print("\nslow eigenvalues, critical circle of FunctionalizedCurvature(0.1, 8.8, 4), "
+          "finite differences, k=6 nearest 0")
+    print(f"{'N':>7} {'seconds':>8} {'k=2 pair - exact':>17} {'estimate':>9} "
+          f"{'k=0 - exact':>12} {'estimate':>9}")
+    devs = []
+    for N in Ns:
+        c = Curve.circle(R, FiniteDifference(N))
+        t0 = time.perf_counter()
+        s = spectrum(E, c, k=6, sigma=0.0)
+        dt = time.perf_counter() - t0
+        row = [f"{N:>7} {dt:>8.2f}"]
+        for exact in (lam[2], lam[0]):
+            i = int(np.argmin(np.abs(s.eigenvalues - exact)))
+            row.append(f"{s.eigenvalues[i] - exact:>17.3e} {s.errors[i]:>9.1e}")
+            if exact == lam[2]:
+                devs.append(abs(s.eigenvalues[i] - exact))
+        print(" ".join(row))
+    p = -np.polyfit(np.log(Ns[:3]), np.log(devs[:3]), 1)[0]
+    print(f"fitted order of the k = 2 pair (N = {Ns[0]}..{Ns[2]}): {p:.3f}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer sizes and repeats")
@@ -100,6 +132,7 @@ def main(argv=None):
         repeats, fourier = 5, [65, 129, 257, 513]
     run_fd(Ns, repeats)
     run_fourier(fourier, repeats)
+    run_spectra([2000, 4000, 8000] if args.quick else [2000, 4000, 8000, 16000, 32000, 64000])
 
 
 if __name__ == "__main__":

@@ -359,11 +359,13 @@ class SecondOrderDensity:
         (Fourier), shape (2N, 2N)
             Symmetric: ``d^2/d delta^2 E(U + delta U1) = U1^T H U1``.
         """
-        rest, T2, B2 = self.euclidean_hessian_parts(c)
-        H = T2.T @ (B2 @ T2)
+        Y, KK, T2, _, BT2 = self._hessian_terms(c)
+        H = T2.T @ BT2 + Y + Y.T
         if c.grid.sparse:
-            return (rest + H).tocsr()
-        return rest + H
+            Z = sp.csr_matrix((c.N, c.N))
+            return (H + sp.bmat([[KK, Z], [Z, Z]])).tocsr()
+        H[: c.N, : c.N] += KK
+        return H
 
     def euclidean_hessian_parts(self, c: Curve):
         """``(H_rest, T2, B2)`` with ``euclidean_hessian(c) = H_rest + T2^T B2 T2``.
@@ -399,6 +401,17 @@ class SecondOrderDensity:
         >>> bool(abs(rest + T2.T @ B2 @ T2 - d.euclidean_hessian(c)).max() < 1e-8 * abs(rest).max())
         True
         """
+        Y, KK, T2, B2, _ = self._hessian_terms(c)
+        rest = Y + Y.T
+        if c.grid.sparse:
+            Z = sp.csr_matrix((c.N, c.N))
+            return (rest + sp.bmat([[KK, Z], [Z, Z]])).tocsr(), T2.tocsr(), B2
+        rest = np.array(rest)
+        rest[: c.N, : c.N] += KK
+        return rest, T2, B2
+
+    def _hessian_terms(self, c: Curve):
+        """``(Y, KK, T2, B2, B2 T2)`` of the module docstring's Hessian."""
         grid = c.grid
         m = _maps(c, self.placement)
         pts = (m.Q, m.P, m.K)
@@ -420,8 +433,9 @@ class SecondOrderDensity:
         LK, Lg = m.L_K, m.L_g
         # the rows (Q, P) of T and their 2 x 2 block of weighted second derivatives
         T2 = vstack([Qrow, Prow])
+        BT2 = vstack([grid.scale_rows(wg * fqq, Qrow) + grid.scale_rows(wg * fqp, Prow),
+                      grid.scale_rows(wg * fqp, Qrow) + grid.scale_rows(wg * fpp, Prow)])
         if grid.sparse:
-            T2 = T2.tocsr()
             B2 = sp.bmat([[sp.diags(wg * fqq), sp.diags(wg * fqp)],
                           [sp.diags(wg * fqp), sp.diags(wg * fpp)]], format="csr")
         else:
@@ -434,13 +448,7 @@ class SecondOrderDensity:
               + hstack([S(Lg, w * fk, LK), grid.diag(np.zeros(c.N))]))
         Y = vstack([YK, Yg])
         KK = S(LK, wg * fkk, LK)
-        rest = Y + Y.T
-        if grid.sparse:
-            Z = sp.csr_matrix((c.N, c.N))
-            return (rest + sp.bmat([[KK, Z], [Z, Z]])).tocsr(), T2, B2
-        rest = np.array(rest)
-        rest[: c.N, : c.N] += KK
-        return rest, T2, B2
+        return Y, KK, T2, B2, BT2
 
 
 @dataclass(frozen=True)
