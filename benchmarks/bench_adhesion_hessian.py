@@ -7,8 +7,8 @@ gradient (pairs, fields and the adjoint sweep), of assembling the Hessian, its
 storage and the peak memory of the assembly (tracemalloc), one assembled product
 ``H @ v``, one matrix-free product, and the sparse LU of the shift-invert
 saddle-point system (time and fill, short-range kernels only); then the fitted
-exponent of each column against N. Sizes whose estimated memory exceeds ``--memory-budget`` are skipped
-(say which).
+exponent of each column against N. Sizes whose estimated memory exceeds
+``--memory-budget`` are skipped (say which).
 
 Timings are wall-clock best-of-``--repeat`` and noisy on a shared machine.
 
@@ -74,7 +74,8 @@ def measure(scenario, N, method, budget, repeat, lu):
     row = {"N": N, "P": P}
     dense = method == "dense" or P > N * (N - 1) // 4
     if BYTES_PER_PAIR["derivatives"] * P > budget:
-        row["skip"] = f"skipped: ~{BYTES_PER_PAIR['derivatives'] * P / 1e9:.1f} GB for the pair data"
+        gb = BYTES_PER_PAIR["derivatives"] * P / 1e9
+        row["skip"] = f"skipped: ~{gb:.1f} GB for the pair data"
         return row
     row["gradient"], d = best_of(lambda: E.derivatives(c), repeat)
     v = np.random.default_rng(0).standard_normal(2 * N)
@@ -103,8 +104,8 @@ def report(title, rows):
     print(f"{'N':>6} {'pairs':>9} {'form':>8} {'gradient':>9} {'assemble':>9} {'storage':>9} "
           f"{'peak':>9} {'H @ v':>9} {'H v free':>9} {'LU':>8} {'LU fill':>9} {'|Hv-hv|':>8}")
     for r in rows:
-        ms = lambda k: f"{r[k] * 1e3:>7.1f}ms" if k in r else f"{'-':>9}"
-        mb = lambda k: f"{r[k] / 1e6:>7.1f}MB" if k in r else f"{'-':>9}"
+        ms = lambda k, r=r: f"{r[k] * 1e3:>7.1f}ms" if k in r else f"{'-':>9}"
+        mb = lambda k, r=r: f"{r[k] / 1e6:>7.1f}MB" if k in r else f"{'-':>9}"
         print(f"{r['N']:>6} {r['P']:>9} {r.get('form', '-'):>8} {ms('gradient')} {ms('assemble')} "
               f"{mb('storage')} {mb('peak')} {ms('matvec')} {ms('hvp')} "
               + (f"{r['lu']:>7.2f}s" if "lu" in r else f"{'-':>8}")

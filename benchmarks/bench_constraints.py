@@ -46,7 +46,8 @@ def bench_polish(grids):
     print("polish: vesicle (nu = 0.9) from an ellipse")
     print(f"{'grid':>22} {'steps':>6} {'seconds':>9} {'rel. residual':>14}")
     for grid in grids:
-        r, dt = timed(lambda: polish(CanhamHelfrich(1.0), ellipse(grid), constraints=VESICLE))
+        r, dt = timed(lambda grid=grid: polish(CanhamHelfrich(1.0), ellipse(grid),
+                                             constraints=VESICLE))
         print(f"{grid!r:>22} {r.n_newton:>6} {dt:>9.3f} {r.relative_residual:>14.2e}")
 
 
@@ -56,8 +57,8 @@ def bench_spectrum(grids, p=-1.0):
     exact = -3 * (3 + p)  # lambda_2 = -(k^2 - 1)(eps (k^2 - 1)/R^4 + p/R), k = 2
     for grid in grids:
         c = Curve.circle(1.0, grid)
-        s, dt = timed(lambda: spectrum(CanhamHelfrich(1.0) + Pressure(p), c, k=6,
-                                       constraints=[FixedLength()]))
+        s, dt = timed(lambda c=c: spectrum(CanhamHelfrich(1.0) + Pressure(p), c, k=6,
+                                           constraints=[FixedLength()]))
         lam2 = s.eigenvalues[~s.is_kernel]
         lam2 = lam2[np.argsort(np.abs(lam2 - exact))][:2]
         print(f"{grid!r:>22} {dt:>9.3f} {s.n_unstable:>11} "
@@ -69,8 +70,9 @@ def bench_flow(Ns):
     print(f"{'N':>6} {'steps':>6} {'seconds':>9} {'|dA| / A':>10} {'|dL| / L':>10}")
     x, y = ellipse(Fourier(257)).positions()
     for N in Ns:
-        res, dt = timed(lambda: solve_flow(CHA(eps=1.0, beta=0.0, rho=1.0), (x, y), 0.1, N=N,
-                                           tol=1e-5, constraints=[FixedLength(), FixedArea()]))
+        res, dt = timed(lambda N=N: solve_flow(CHA(eps=1.0, beta=0.0, rho=1.0), (x, y), 0.1,
+                                               N=N, tol=1e-5,
+                                               constraints=[FixedLength(), FixedArea()]))
         A, L = res.areas(), res.length
         print(f"{N:>6} {res.n_steps:>6} {dt:>9.3f} {np.abs(A - A[0]).max() / A[0]:>10.1e} "
               f"{np.abs(L - L[0]).max() / L[0]:>10.1e}")

@@ -30,7 +30,7 @@ def test_factored_is_the_dense_matrix(lam):
     assert isinstance(Hf, ReducedHessian) and isinstance(Hd, np.ndarray)
     assert np.abs(Hf.toarray() - Hd).max() < 1e-13 * np.abs(Hd).max()
     Hs = geometry.constraint_hessians(c)
-    ref = sum(l * to_dense(H) for l, H in zip(lam, Hs))
+    ref = sum(l * to_dense(H) for l, H in zip(lam, Hs, strict=False))
     assert np.abs(Hd - ref).max() < 1e-13 * np.abs(ref).max()
     W = np.concatenate([c.dsigma, c.dsigma])[:, None] * Hd
     assert np.abs(W - W.T).max() < 1e-13 * np.abs(W).max()  # dsigma-self-adjoint

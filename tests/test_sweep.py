@@ -104,7 +104,8 @@ def test_bad_arguments(tmp_path):
 # ------------------------------------------------------------- executors
 def test_dask_local_cluster_equals_process_pool(tmp_path, capsys):
     """The 16-point headline sweep: LocalCluster(2 worker processes) == process pool."""
-    from distributed import LocalCluster
+    LocalCluster = pytest.importorskip(
+        "distributed", reason="dask.distributed is not installed (the 'dask' extra)").LocalCluster
 
     from qsa.cli import main
     from qsa.sweep import dask_executor

@@ -90,7 +90,7 @@ def run(args):
         print(spec.message)
         ev = spec.eigenvalues[: args.show]
         print(f"  {'i':>4} {'lambda':>22} {'error':>9}")
-        for i, (lam, err, kern) in enumerate(zip(ev, spec.errors, spec.is_kernel)):
+        for i, (lam, err, kern) in enumerate(zip(ev, spec.errors, spec.is_kernel, strict=False)):
             lam_s = f"{lam:.12g}" if np.isrealobj(ev) else f"{lam.real:.8g}{lam.imag:+.3g}i"
             print(f"  {i:>4} {lam_s:>22} {err:9.1e}{'  kernel' if kern else ''}")
         if spec.unresolved.size:

@@ -867,7 +867,7 @@ class Adhesion(Energy):
                                                                    method=self.method))
 
     def gradient(self, c) -> np.ndarray:
-        """``nabla_I E_A`` in ``<f, h> = int f h dsigma``: the exact derivative of the discrete energy.
+        """``nabla_I E_A`` in ``<f, h> = int f h dsigma``: the discrete energy's exact derivative.
 
         ``d/d delta E_A(U + delta U1) = <nabla_I E_A, U1>`` for every ``U1`` (O(N + pairs)).
 

@@ -423,7 +423,7 @@ class AdhesionDerivatives:
         """
         N = self.curve.N
         XX, XW, WW = (e.tocsr(shape) for e, shape in zip(
-            self._pair_blocks(), ((2 * N, 2 * N), (2 * N, N), (N, N))))
+            self._pair_blocks(), ((2 * N, 2 * N), (2 * N, N), (N, N)), strict=False))
         return sp.bmat([[XX, XW], [XW.T, WW]], format="csr")
 
     def _dense_pair_hessian(self):
@@ -431,7 +431,7 @@ class AdhesionDerivatives:
         K = np.zeros((3 * N, 3 * N))
         XX, XW, WW = self._pair_blocks()
         for e, ro, co in ((XX, 0, 0), (XW, 0, 2 * N), (WW, 2 * N, 2 * N)):
-            for r, cc, v in zip(e.rows, e.cols, e.vals):
+            for r, cc, v in zip(e.rows, e.cols, e.vals, strict=False):
                 K[ro + r, co + cc] = v  # every position occurs once
                 if co != ro:
                     K[co + cc, ro + r] = v

@@ -426,8 +426,9 @@ class EquilibriumSystem:
 
 
 def assemble_jacobian(A, B, Crows, D, low):
-    """The bordered matrix ``[[A, B, P, VY], [Crows, D, 0, 0], [Q^T, 0, -I, 0], [cK, cL e_1^T, 0, cY]]``.
+    """The bordered sparse matrix of the Newton step, with low-rank terms and states unfolded.
 
+    ``[[A, B, P, VY], [Crows, D, 0, 0], [Q^T, 0, -I, 0], [cK, cL e_1^T, 0, cY]]``.
     The low-rank terms ``P Q^T`` of ``A`` are unfolded into extra unknowns ``z = Q^T dx``
     (rows ``Q^T dx - z = 0``), and implicit states
     (:class:`~qsa.equilibria.two_point_terms.StateBorder`) into extra unknowns ``Y1``

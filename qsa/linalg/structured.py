@@ -308,7 +308,7 @@ class ReducedHessian:
 
     # ------------------------------------------------------------ solutions
     def _scalings(self):
-        """``(l, r)`` when ``Lf = diag(l)``, ``Rf = diag(r)`` are invertible diagonals, else None."""
+        """``(l, r)`` if ``Lf = diag(l)``, ``Rf = diag(r)`` are invertible diagonals, else None."""
         out = []
         for A in (self.left, self.right):
             if A.shape[0] != A.shape[1] or sp.triu(A, 1).nnz or sp.tril(A, -1).nnz:

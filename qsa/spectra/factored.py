@@ -124,7 +124,8 @@ class FactoredNormalOperator:
     >>> from qsa.equilibria import circle
     >>> from qsa.spectra import lagrange_hessian, normal_operator
     >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
-    >>> op = FactoredNormalOperator.from_lagrangian(eq.curve, lagrange_hessian(eq.energy, eq.curve).matrix)
+    >>> LH = lagrange_hessian(eq.energy, eq.curve).matrix
+    >>> op = FactoredNormalOperator.from_lagrangian(eq.curve, LH)
     >>> phi = np.cos(2 * np.pi * 2 * eq.curve.grid.s)
     >>> bool(np.allclose(op.matvec(phi), normal_operator(eq.energy, eq.curve) @ phi))
     True
@@ -249,7 +250,7 @@ class FactoredNormalOperator:
 
     # ---------------------------------------------------------------- solves
     def shift_invert(self, sigma=0.0, deflate=None, constrain=None) -> ShiftInvert:
-        """The bordered factorization applying ``(W J - sigma W)^{-1}`` (see :class:`ShiftInvert`)."""
+        """The bordered factorization applying ``(W J - sigma W)^{-1}`` (:class:`ShiftInvert`)."""
         return ShiftInvert(self, float(sigma), deflate, constrain)
 
     def ritz(self, R):
@@ -401,7 +402,8 @@ class ShiftInvert:
     >>> from qsa.equilibria import circle
     >>> from qsa.spectra import lagrange_hessian
     >>> eq = circle(1.0, 0.1, grid=17, kstar=5.0)
-    >>> op = FactoredNormalOperator.from_lagrangian(eq.curve, lagrange_hessian(eq.energy, eq.curve).matrix)
+    >>> LH = lagrange_hessian(eq.energy, eq.curve).matrix
+    >>> op = FactoredNormalOperator.from_lagrangian(eq.curve, LH)
     >>> si = op.shift_invert(sigma=1.0)
     >>> phi = np.cos(2 * np.pi * 2 * eq.curve.grid.s)  # lambda_2 = -4.86
     >>> bool(np.allclose(si.solve(eq.curve.dsigma * phi), phi / (-4.86 - 1.0)))

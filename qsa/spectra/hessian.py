@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from qsa.closure import closure_hessian
+from qsa.constraints import bind_constraints, project_velocity
 from qsa.curve import Curve
 from qsa.energies.base import Energy, add_matrices
 from qsa.energies.constrained import (
@@ -34,8 +36,6 @@ from qsa.energies.constrained import (
     residual_floor,
     residual_scale,
 )
-from qsa.closure import closure_hessian
-from qsa.constraints import bind_constraints, project_velocity
 from qsa.geometry import constraint_gradients
 from qsa.linalg import ReducedHessian
 

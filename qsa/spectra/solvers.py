@@ -82,7 +82,6 @@ class EigenSolution:
 def _complement_basis(curve, R):
     """``<.,.>``-orthonormal basis (columns) of the complement of ``span R``, shape (N, N - m)."""
     rw = np.sqrt(curve.dsigma)
-    N = curve.N
     if R.shape[0] == 0:
         return np.diag(1.0 / rw)
     Q, _ = np.linalg.qr((R * rw).T, mode="complete")

@@ -70,7 +70,7 @@ def test_polygon_scenario():
 
 @pytest.mark.slow
 def test_regular_polygon_family():
-    """3 ... 8 corners x facets 0.25 ... 0.5 (measured table in the front-ODE notes)."""
+    """3 ... 8 corners x facets 0.25 ... 0.5 (measured table: the reduction guide)."""
     corr, unc = {}, {}
     for n in range(3, 9):
         for f in (0.25, 0.3, 0.35, 0.4, 0.5):

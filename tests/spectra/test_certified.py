@@ -131,7 +131,7 @@ def test_error_estimates_bound_the_extended_precision_eigenvalues():
             for j in range(c.N):
                 B[i, j] = (A[i, j] + A[j, i]) / 2 / (rw[i] * rw[j])
         exact = np.array([float(x) for x in mpmath.eigsy(B, eigvals_only=True)])
-    for lam, err, kern in zip(s.eigenvalues, s.errors, s.is_kernel):
+    for lam, err, kern in zip(s.eigenvalues, s.errors, s.is_kernel, strict=False):
         if kern:
             continue
         nearest = exact[np.argmin(np.abs(exact - lam))]

@@ -36,7 +36,7 @@ def test_reduced_hessian_solves_agree_with_the_formed_matrix(N, l_star):
     rigid = op.ritz(rigid_normal_basis(c))[0]
     sol = certified_eigenpairs(op, np.zeros((0, N)), k=8, sigma=0.0, rigid=rigid)
     dense = np.linalg.eigvals(Jd).real
-    for lam, err in zip(sol.values, sol.errors):
+    for lam, err in zip(sol.values, sol.errors, strict=False):
         near = dense[np.argmin(np.abs(dense - lam))]
         # the formed matrix's own round-off is eps |J|: the certified value lies within it
         assert abs(near - lam) <= err + 1e-13 * np.max(np.abs(dense))
