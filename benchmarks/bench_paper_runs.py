@@ -5,7 +5,8 @@ Prints one table row per run: final time, nodes, accepted steps, wall seconds
 and the headline result (fronts / symmetry defect for the facet run; sheet
 pairs / separation ratio for CHA). ``--quick`` runs only the faceting
 coarsening to the paper's t = 2; ``--cha`` adds the three folding runs
-(about 4-7 minutes each at N = 2400 on a loaded machine).
+(Table T1 with l* = 0.1, N = 600: about 1.5-2 minutes each; the literal l* = 0.01 at
+N = 2400 took 4-7 minutes each on a loaded machine).
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_paper_runs.py [--quick] [--cha]``.
 """

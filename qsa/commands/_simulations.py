@@ -65,7 +65,9 @@ def cha_arguments(parser):
     sc = CHAScenario()
     lo, hi = sc.noise_modes
     parser.add_argument("--N", type=int_at_least(8), default=None,
-                        help=f"nodes (default {sc.N})")
+                        help=f"nodes (default {sc.N} at l* = {sc.l_star:g}; for another l* "
+                             "CHAScenario.nodes_for(l*) = max(600, 24/l*), e.g. "
+                             f"{sc.nodes_for(0.01)} at 0.01)")
     parser.add_argument("--noise", type=nonnegative_float, default=sc.noise,
                         help=f"relative radial noise in modes {lo}-{hi} that breaks the "
                              f"{sc.lobes}-fold symmetry (default %(default)g: the exact "
@@ -74,18 +76,21 @@ def cha_arguments(parser):
                         help="noise seed (default %(default)s)")
     parser.add_argument("--kernel-length", "--l-star", dest="l_star", metavar="LENGTH",
                         type=positive_float, default=sc.l_star,
-                        help="adhesion kernel length l* (default %(default)g, Table T1 as "
-                             "printed; 0.1 gives the paper's labyrinths and layers, see "
-                             "CHAScenario)")
+                        help="adhesion kernel length l* (default %(default)g: Table T1's "
+                             "'0.01' is the reference code's parameter l*^2; --l-star 0.01 "
+                             "is the literal reading, see CHAScenario)")
 
 
 def cha_scenario(args, rho):
-    """Table T1's :class:`qsa.paper.CHAScenario` with the command line's rho, noise, seed, l*."""
-    from dataclasses import replace
+    """Table T1's :class:`qsa.paper.CHAScenario` with the command line's rho, noise, seed, l*.
 
+    Without ``--N`` the nodes are ``CHAScenario.nodes_for(l*)`` (600 at the default l* = 0.1,
+    2400 at the literal 0.01).
+    """
     from qsa.paper import CHAScenario
 
-    return replace(CHAScenario(), rho=rho, noise=args.noise, seed=args.seed, l_star=args.l_star)
+    return CHAScenario.for_kernel(args.l_star, N=args.N, rho=rho, noise=args.noise,
+                                  seed=args.seed)
 
 
 def progress(args):

@@ -1,15 +1,17 @@
 """``qsa reproduce folding``: CHA folding for rho = 1.2, 1.3, 1.4 from identical data (f:fold).
 
-Table T1 parameters, the crenellated start of f:Snowflake, to t = 2.5. Each
-run writes ``cha_rho<rho>.npz/.json`` and resumes from its own checkpoint;
-the summary compares the number of paired sheets (more folds for larger rho),
-their separation against l* sqrt(a^2 + 1/2), and the self-intersection
-reports (the paper: a glancing self-intersection at rho = 1.4).
+Table T1 parameters (l* = 0.1, N = 600), the crenellated start of f:Snowflake,
+to t = 2.5. Each run writes ``cha_rho<rho>.npz/.json`` and resumes from its own
+checkpoint; the summary compares the number of paired sheets (more folds for
+larger rho), their separation against l* sqrt(a^2 + 1/2), and the
+self-intersection reports (the paper: a glancing self-intersection at rho = 1.4).
 
-With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
-petals, not the paper's labyrinths and stacked layers; ``--kernel-length 0.1 --N 600``
-gives those (``qsa.paper.CHAScenario`` explains why and lists the
-hypotheses tested).
+Table T1's "l* = 0.01" is the reference code's kernel parameter, which is l*^2
+(it divides the squared distance by it; its default 0.25 is the appendix
+example's l* = 0.5, confirmed by ``qsa reproduce convergence``), so l* = 0.1:
+labyrinths then stacked layers, as in the paper. ``--l-star 0.01`` (N = 2400)
+is the literal reading: 13 lobes and then a few petals (``qsa.paper.CHAScenario``
+explains why and lists the hypotheses tested).
 """
 
 from __future__ import annotations

@@ -1,16 +1,15 @@
 """``qsa reproduce snowflake``: CHA flow from the 13-fold crenellated start (f:Snowflake).
 
-Table T1 (l* = 0.01, a = 1, A0 = 40, beta = 60, eps = 0.08), rho = 1.3, to
-t = 2.5 at N = 2400 (override with --N). Prints the paired sheets and their
+Table T1 (l* = 0.1, a = 1, A0 = 40, beta = 60, eps = 0.08), rho = 1.3, to
+t = 2.5 at N = 600 (override with --N). Prints the paired sheets and their
 separation against l* sqrt(a^2 + 1/2), the self-intersection report and the
 wall time; ``--check-resolution`` first compares N with 2N over a short time.
 The run is stored as ``cha_rho1.3`` (as in ``qsa reproduce folding``), so
 the two commands share it with the same ``--out`` and ``--resume``.
 
-With Table T1 as printed (l* = 0.01) the curve forms 13 lobes and then a few
-petals, not the paper's labyrinths and stacked layers; ``--kernel-length 0.1 --N 600``
-gives those (``qsa.paper.CHAScenario`` explains why and lists the
-hypotheses tested).
+Table T1's "l* = 0.01" is the reference code's kernel parameter l*^2, so
+l* = 0.1 (``qsa.paper.CHAScenario``); ``--l-star 0.01`` (N = 2400) is the
+literal reading: 13 lobes and then a few petals, not the paper's labyrinths.
 """
 
 from __future__ import annotations

@@ -232,12 +232,12 @@ def run_cha(scenario=None, out=None, *, name=None, t_final=None, N=None, resume=
     Parameters
     ----------
     scenario : CHAScenario, optional
-        Default: Table T:T1 with rho = 1.3.
+        Default: Table T:T1 (l* = 0.1, N = 600) with rho = 1.3.
     out : str, optional
         Output folder (``<name>.npz``, ``<name>.json``, checkpoint).
     name : str, optional
         File stem (default ``cha_rho<rho>``, plus ``_lstar<l*>`` when l* is
-        not Table T1's 0.01).
+        not the default 0.1).
     t_final, N : optional
         Override the scenario's final time and number of nodes.
     resume : bool

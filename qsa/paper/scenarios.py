@@ -5,10 +5,11 @@
   perturbed circle whose curvature lies in the spinodal range of the well
   (``W''(kappa) < 0`` for ``kappa*(3 - sqrt 3)/6 < kappa < kappa*(3 + sqrt 3)/6``).
 * :class:`CHAScenario` -- the Canham-Helfrich adhesion-repulsion flow
-  (e:CHA-Energy, e:CHA-GF) with Table T:T1's parameters (l* = 0.01, a = 1,
-  A0 = 40, beta = 60, eps = 0.08) from the 13-fold crenellated start
-  ``r = 0.6 (1 + 0.4 tanh(3 cos 13 theta) / tanh 3)`` (figures f:Snowflake,
-  rho = 1.3, and f:fold, rho = 1.2, 1.3, 1.4 from identical data).
+  (e:CHA-Energy, e:CHA-GF) with Table T:T1's parameters (a = 1, A0 = 40,
+  beta = 60, eps = 0.08 and l* = 0.1: the table's "l* = 0.01" is the
+  reference code's kernel parameter l*^2, see :class:`CHAScenario`) from the
+  13-fold crenellated start ``r = 0.6 (1 + 0.4 tanh(3 cos 13 theta) / tanh 3)``
+  (figures f:Snowflake, rho = 1.3, and f:fold, rho = 1.2, 1.3, 1.4 from identical data).
 * :class:`ConvergenceScenario` (:data:`CONVERGENCE`) -- the appendix's CHA
   example (eps = 0.1, beta = 1, rho = 1.5, A0 = 10, l* = 1/2, a = 1) from
   ``r = 1 + 0.35 cos 3 theta`` (+ 0.05 sin 4 theta in x): Table ap:t1 and the
@@ -251,19 +252,58 @@ class CHAScenario:
     """Canham-Helfrich adhesion-repulsion from the crenellated start (Table T:T1).
 
     ``rho`` is the precompression factor; ``N`` the number of nodes (the
-    initial length is about 13.7, so ``N = 2400`` gives ``L/N = 0.0057`` at the
-    start and ``0.008 rho/1.4`` at the equilibrium length ``rho L0``, below
-    ``l* = 0.01``).
+    initial length is 14.47, so the default ``N = 600`` gives ``L/N = 0.024``
+    at the start and ``0.034 rho/1.4`` at the equilibrium length ``rho L0``,
+    a third of ``l* = 0.1``; :meth:`nodes_for` gives the default for another l*).
 
-    Resolution (``resolution_check``): N = 2400 against 4800 to t = 2e-3, the
-    buckling transient, the node positions differ by at most 4.4e-5 =
-    0.0044 l* (0.36% of the pair separation).
+    **Table T1's l* (erratum).** The reference code behind the paper
+    parameterizes the kernel e:LJ by ``l*^2``, not ``l*``: it divides the
+    *squared* distance by its parameter, ``exp(-|d|^2 / p)`` with ``p = l*^2``.
+    Its default ``p = 0.25`` is the appendix example's ``l* = 0.5``, and that
+    reading is confirmed by Table ap:t1, which qsa reproduces with
+    ``exp(-|d|^2 / l*^2)``, ``l* = 1/2`` (differences 0.187 / 0.0396 / 0.0096 for
+    N = 50 / 100 / 200, paper 0.1909 / 0.0397 / 0.0101), not with
+    ``exp(-|d|^2 / l*)`` (0.029 / 0.0063 / 0.0017). Table T1's "l* = 0.01", read
+    as that parameter, is ``l* = 0.1`` -- exactly where the paper's labyrinths
+    and stacked layers appear. It is the default here; :meth:`literal` is the
+    table read as printed (``l* = 0.01``, ``N = 2400``; ``qsa reproduce
+    snowflake|folding --l-star 0.01``).
 
-    Why Table T1 as printed does not fold like f:Snowflake / f:fold
-    (measured, N = 2400, to t = 2.5): 13-fold symmetric lobes until
+    The energy balance says the same (``fold_balance``): a hairpin of two
+    sheets at the optimal separation ``d = l* sqrt(a^2 + 1/2)`` costs bending
+    energy ``pi eps / d`` while pairing gains
+    ``2 sqrt(pi) A0 l* exp(-a^2 - 1/2) / a^2`` per unit length, so one fold pays
+    for itself over ``~ eps / (A0 l*^2)`` units of paired length: 0.65 at
+    l* = 0.1, but 65 at l* = 0.01 (the whole curve is ~19 long).
+
+    Measured at l* = 0.1 (``qsa reproduce folding``, N = 600, to t = 2.5,
+    90 / 99 / 115 s per run): symmetric buckling to t ~ 3e-3, finger pairing
+    breaks the symmetry by t ~ 0.01, labyrinths, then parallel fingers
+    (stacked layers) that settle by t ~ 0.4; 10 / 11 / 14 sheet pairs for
+    rho = 1.2 / 1.3 / 1.4 (more folds for larger rho; the counts move by 1-2
+    with the step sequence), median separation ratios 0.939 / 0.924 / 0.905
+    against l* sqrt(a^2 + 1/2) (closest points 0.73 / 0.72 / 0.70: the kernel
+    is no longer short against the finger width), no self-intersection,
+    closest approach during the buckling transient (t ~ 5e-4) 0.055 / 0.042 /
+    0.030 -- falling with rho, towards the paper's glancing contact at 1.4.
+    Going on in rho (``--rho 1.5 1.6``): closest approach 0.018 at rho = 1.5
+    (N = 600), and rho = 1.6 reaches contact -- at N = 600 a glancing one
+    (closest approach 8e-4, or a crossing for t = 4.3e-3 ... 4.9e-3 that the
+    repulsion undoes, depending on the step sequence), at N = 1200 a crossing
+    from t = 1.8e-3 on at the 13 points where neighbouring necks meet near the
+    centre (radius 0.26). So from this crenellated start the curve crosses
+    itself for rho ~ 1.6 rather than the paper's 1.4; the self-intersection
+    report gives the time, the crossing points and the state (shown in the
+    f:fold figure). N = 600 vs 1200 to t = 2e-3 differ by 0.055 l*. The
+    rho = 1.2 end state is a labyrinth, not the paper's single rolled-up
+    sheet, and it settles by t ~ 0.4 rather than relaxing to 2.5.
+
+    The literal reading (l* = 0.01, N = 2400; N vs 4800 to t = 2e-3 differ by
+    4.4e-5 = 0.0044 l*), measured to t = 2.5: 13-fold symmetric lobes until
     t ~ 0.15-0.2, then a collapse into a few petals with curved neck-bulb
     contacts; 0 / 2 / 6 sheet pairs for rho = 1.2 / 1.3 / 1.4; no labyrinths
-    or stacked layers. Hypotheses tested with short runs (rho = 1.3, t = 0.3):
+    or stacked layers. Hypotheses tested there with short runs (rho = 1.3,
+    t = 0.3), none of which changes the morphology:
 
     * centred-difference force normal (``CHA(force_normal="centred")``, the
       paper code's, which explains Table ap:t1): the same run (energy 26.69
@@ -281,55 +321,31 @@ class CHAScenario:
       so its t = 2.5 is physical time ~5 -- a time rescaling, not a change
       of shape.
 
-    None changes the morphology. The cause is the length scale: a hairpin
-    of two sheets at the optimal separation ``d = l* sqrt(a^2 + 1/2)``
-    costs bending energy ``pi eps / d`` while pairing gains
-    ``2 sqrt(pi) A0 l* exp(-a^2 - 1/2) / a^2`` per unit length
-    (``fold_balance``), so one fold pays for itself only over
-    ``~ eps / (A0 l*^2)`` units of paired length: 65
-    at Table T1 (l* = 0.01; the whole curve is ~19 long) but 0.65 at
-    l* = 0.1. At l* = 0.03 (N = 1800) and 0.05 (N = 1200), fold lengths 7.2
-    and 2.6, rho = 1.3 still keeps the 13 symmetric lobes to t = 0.3 (defect
-    0.005, the grid's); at l* = 0.2 (N = 300, to t = 2.5, 26-33 s) the lobes
-    turn into thick fingers, 2 / 4 pairs for rho = 1.2 / 1.4 at 0.83 / 0.81 of
-    the optimal separation. With l* = 0.1 (``--l-star 0.1``; N = 600 suffices) the
-    runs do what the paper describes: symmetric buckling to t ~ 3e-3, finger pairing
-    breaks the symmetry by t ~ 0.01, labyrinths, then parallel fingers
-    (stacked layers) that settle by t ~ 0.4. Measured (``qsa reproduce
-    folding --l-star 0.1 --N 600``, to t = 2.5, 90 / 99 / 115 s per run):
-    10 / 11 / 14 sheet pairs for rho = 1.2 / 1.3 / 1.4 (more folds for
-    larger rho; the counts move by 1-2 with the step sequence, e.g. 9 / 10 /
-    12 with other snapshot times), median separation ratios 0.939 / 0.924 /
-    0.905 against l* sqrt(a^2 + 1/2) (closest points 0.73 / 0.72 / 0.70: the
-    kernel is no longer short against the finger width), no
-    self-intersection, closest approach during the buckling transient
-    (t ~ 5e-4) 0.055 / 0.042 / 0.030 -- falling with rho, towards the
-    paper's glancing contact at 1.4. Going on in rho (``--rho 1.5 1.6``):
-    closest approach 0.018 at rho = 1.5 (N = 600), and rho = 1.6 reaches
-    contact -- at N = 600 a glancing one (closest approach 8e-4, or a crossing
-    for t = 4.3e-3 ... 4.9e-3 that the repulsion undoes, depending on the step
-    sequence), at N = 1200 a crossing from t = 1.8e-3 on at the 13 points
-    where neighbouring necks meet near the centre (radius 0.26). So from this
-    crenellated start the curve crosses itself for rho ~ 1.6 rather than the
-    paper's 1.4; the self-intersection report gives the time, the crossing
-    points and the state (shown in the f:fold figure). N = 600 vs 1200 to
-    t = 2e-3 differ by 0.055 l*. The rho = 1.2 end state is a labyrinth, not the paper's single
-    rolled-up sheet, and it settles by t ~ 0.4 rather than relaxing to 2.5.
-    The kernel form itself is as printed: the paper's Table ap:t1 (l* = 1/2) is reproduced
-    with ``exp(-|d|^2 / l*^2)`` (differences 0.187 / 0.0396 / 0.0096 for
-    N = 50 / 100 / 200, paper 0.1909 / 0.0397 / 0.0101), not with
-    ``exp(-|d|^2 / l*)`` (0.029 / 0.0063 / 0.0017). So either Table T1's
-    l* (or A0, eps) is misprinted for the folding runs, or they used another
-    setting; qsa keeps Table T1 as the default and documents both.
+    In between, l* = 0.03 (N = 1800) and 0.05 (N = 1200), fold lengths 7.2 and
+    2.6, rho = 1.3 still keeps the 13 symmetric lobes to t = 0.3 (defect 0.005,
+    the grid's); at l* = 0.2 (N = 300, to t = 2.5, 26-33 s) the lobes turn into
+    thick fingers, 2 / 4 pairs for rho = 1.2 / 1.4 at 0.83 / 0.81 of the
+    optimal separation.
+
+    Examples
+    --------
+    >>> sc = CHAScenario()
+    >>> sc.l_star, round(sc.kernel_parameter, 12), sc.N
+    (0.1, 0.01, 600)
+    >>> lit = CHAScenario.literal()
+    >>> lit.l_star, lit.N
+    (0.01, 2400)
     """
 
     rho: float = 1.3
     eps: float = 0.08
     beta: float = 60.0
     A0: float = 40.0
-    l_star: float = 0.01
+    # NOTE: Table T1 prints "l* = 0.01": the reference code's kernel parameter l*^2
+    # (the class docstring's erratum), so l* = 0.1.
+    l_star: float = 0.1
     a: float = 1.0
-    N: int = 2400
+    N: int = 600
     r0: float = 0.6
     amp: float = 0.4
     steep: float = 3.0
@@ -342,6 +358,35 @@ class CHAScenario:
     tol: float = 1e-4
     figure_times: tuple = (0.0, 1.5e-3, 0.1432, 0.16414, 0.2, 0.713, 2.5)
     name: str = field(default="cha")
+
+    @classmethod
+    def literal(cls, **changes):
+        """Table T1 read as printed: ``l* = 0.01`` (``N = 2400``); other fields as ``changes``."""
+        return cls.for_kernel(0.01, **changes)
+
+    @classmethod
+    def for_kernel(cls, l_star, **changes):
+        """The scenario with kernel length ``l_star``; ``N`` defaults to ``nodes_for(l_star)``."""
+        N = changes.pop("N", None)
+        return cls(l_star=l_star, N=cls.nodes_for(l_star) if N is None else N, **changes)
+
+    @staticmethod
+    def nodes_for(l_star):
+        """Default nodes for kernel length ``l_star``: ``max(600, 24 / l*)`` in hundreds.
+
+        ``24 / l*`` keeps the node spacing at about ``0.6 l*`` on the initial length
+        (14.5), ``0.85 l*`` at ``1.4 L0``; 600 is the least that resolves the
+        fingers' tips at ``l* >= 0.1`` (N = 600 vs 1200 differ by 0.055 l*).
+
+        >>> CHAScenario.nodes_for(0.1), CHAScenario.nodes_for(0.01), CHAScenario.nodes_for(0.03)
+        (600, 2400, 800)
+        """
+        return max(600, 100 * math.ceil(round(0.24 / float(l_star), 9)))
+
+    @property
+    def kernel_parameter(self):
+        """``l*^2``: the reference code's kernel parameter (it divides ``|d|^2`` by it)."""
+        return self.l_star**2
 
     def model(self):
         return CHA(eps=self.eps, beta=self.beta, rho=self.rho, A0=self.A0,
@@ -371,7 +416,7 @@ class CHAScenario:
         cross terms ``2 int A(d^2 + u^2) du`` of e:AdhE), while the half-circle
         joining them costs ``eps/2 int kappa^2 dsigma = pi eps / d``. A fold
         pays for itself over ``fold_length = (pi eps / d) / gain`` of paired
-        sheet: 65 at Table T1, 0.65 at l* = 0.1.
+        sheet: 0.65 at Table T1 (l* = 0.1), 65 at its literal reading l* = 0.01.
 
         Returns
         -------
@@ -379,7 +424,7 @@ class CHAScenario:
 
         Examples
         --------
-        >>> round(CHAScenario(l_star=0.1).fold_balance().fold_length, 3)
+        >>> round(CHAScenario().fold_balance().fold_length, 3)
         0.649
         """
         d = self.pair_separation()

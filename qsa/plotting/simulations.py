@@ -214,7 +214,8 @@ def cha_figures(run, times=None):
         ax.remove()
     ax = fig.add_subplot(gs[-1, :])
     plot_energy_history(run.t_steps, run.energy_steps, ax=ax)
-    source = "Table T1" if sc.l_star == 0.01 else f"Table T1 but l* = {sc.l_star:g}"
+    source = (f"Table T1, l* = {sc.l_star:g}" if sc.l_star in (0.1, 0.01)
+              else f"Table T1 but l* = {sc.l_star:g}")
     fig.suptitle(f"CHA flow, rho = {sc.rho:g} ({source}), N = {run.N}")
     return {"snapshots": fig}
 

@@ -17,7 +17,7 @@ from tests.helpers import FLOW_MODELS as MODELS
 from tests.helpers import SexticWell, numerical_jacobians, paper_curve, smooth_curve
 
 PAPER_CHA = CONVERGENCE.model_params()  # the appendix's convergence example
-TABLE_T1 = CHAScenario()
+TABLE_T1 = CHAScenario.literal()  # l* = 0.01: the short kernel's neighbour list
 
 
 # ----------------------------------------------------------------- curves

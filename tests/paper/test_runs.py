@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import qsa.io as qsa_io
-from qsa.commands._simulations import cha_lines
+from qsa.commands._simulations import cha_lines, cha_scenario
 from qsa.curve import polygon_self_intersects
 from qsa.io import load_npz
 from qsa.paper import (
@@ -150,7 +150,11 @@ def test_cli_facet_and_snowflake_registered():
     for name in ("snowflake", "folding"):
         args = parser.parse_args(["reproduce", name, "--l-star", "0.1", "--N", "600"])
         assert (args.l_star, args.N) == (0.1, 600)
-        assert parser.parse_args(["reproduce", name]).l_star == 0.01
+        assert parser.parse_args(["reproduce", name]).l_star == 0.1
+        args = parser.parse_args(["reproduce", name, "--l-star", "0.01"])
+        assert cha_scenario(args, 1.3) == CHAScenario.literal(rho=1.3)  # N = 2400
+        args = parser.parse_args(["reproduce", name])
+        assert cha_scenario(args, 1.2) == CHAScenario(rho=1.2)  # l* = 0.1, N = 600
 
 
 # ------------------------------------------------------------------ full runs
@@ -163,16 +167,17 @@ def test_facet_full(tmp_path):
 
 
 @pytest.mark.slow
-def test_folding_full(tmp_path):
-    """f:fold at Table T1, N = 2400 (40-63 s per run quiet, 3-4.5 min loaded; sheet pairs 0/2/6).
+def test_folding_literal_full(tmp_path):
+    """f:fold at Table T1 read literally (l* = 0.01), N = 2400 (40-63 s per run quiet,
+    3-4.5 min loaded; sheet pairs 0/2/6).
 
     The flat-sheet separation l* sqrt(a^2 + 1/2) is met on the long sheets of
     rho = 1.3 (median ratio 1.001). rho = 1.4 ends in short curved neck-bulb
     contacts (0.17-0.19 long): median ratio 1.10, closest point 0.83 -- the
     parallel-strand theory does not describe them, so they are not asserted.
     """
-    fold = run_folding([CHAScenario(rho=rho) for rho in (1.2, 1.3, 1.4)], str(tmp_path),
-                       progress=False)
+    fold = run_folding([CHAScenario.literal(rho=rho) for rho in (1.2, 1.3, 1.4)],
+                       str(tmp_path), progress=False)
     runs, pairs = fold.runs, fold.n_sheet_pairs
     assert fold.success
     assert all(r.energy_max_increase < 0 for r in runs)  # strictly decreasing
@@ -184,15 +189,15 @@ def test_folding_full(tmp_path):
 
 @pytest.mark.slow
 def test_folding_lstar01_full(tmp_path):
-    """f:fold with l* = 0.1 (``--l-star 0.1 --N 600``; 1.5-2 min per run).
+    """f:fold at Table T1 (l* = 0.1, N = 600, the default; 1.5-2 min per run).
 
-    Measured (qsa reproduce folding --l-star 0.1 --N 600, 90-115 s per run):
+    Measured (qsa reproduce folding, 90-115 s per run):
     10 / 11 / 14 sheet pairs for rho = 1.2 / 1.3 / 1.4, median separation
     ratios 0.939 / 0.924 / 0.905, labyrinths then parallel fingers, no
     self-intersection. Backward Euler with step doubling at tol 1e-4 lets the
     energy rise by at most 0.0016 (of ~53) on 21-33 late steps.
     """
-    fold = run_folding([CHAScenario(rho=rho, l_star=0.1, N=600) for rho in (1.2, 1.3, 1.4)],
+    fold = run_folding([CHAScenario(rho=rho) for rho in (1.2, 1.3, 1.4)],
                        str(tmp_path), progress=False)
     runs, pairs = fold.runs, fold.n_sheet_pairs
     assert fold.success
@@ -211,7 +216,7 @@ def test_folding_lstar01_rho16_crosses_where_the_necks_meet():
     (closest approach 8e-4) or briefly crosses, depending on the step sequence;
     rho = 1.5 keeps 0.018 apart.
     """
-    out = run_cha(CHAScenario(rho=1.6, l_star=0.1, N=1200), None, t_final=2.2e-3,
+    out = run_cha(CHAScenario(rho=1.6, N=1200), None, t_final=2.2e-3,
                   progress=False)
     si = out.self_intersection
     assert si.detected and 1e-3 < si.first_time < 2.2e-3

@@ -1,6 +1,7 @@
 """The paper's scenarios: their parameters are the published ones and their data is right."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -88,7 +89,29 @@ def test_cha_initial_data_is_the_crenellated_curve():
     assert L / sc.N < sc.l_star  # the kernel is resolved at the start
     assert sc.rho * L / sc.N < sc.l_star  # ... and at the target length
     assert not polygon_self_intersects(x, y)
-    assert sc.pair_separation() == pytest.approx(0.01 * math.sqrt(1.5))
+    assert sc.pair_separation() == pytest.approx(0.1 * math.sqrt(1.5))
+    lit = CHAScenario.literal()  # Table T1 as printed
+    assert lit.l_star == 0.01 and lit.N == 2400 and lit.rho * L / lit.N < lit.l_star
+    assert replace(lit, l_star=0.1, N=600) == sc
+
+
+def test_table_t1_kernel_length_is_the_code_parameter_squared():
+    from qsa.energies.adhesion import AdhesionKernel
+
+    sc = CHAScenario()
+    assert sc.kernel_parameter == pytest.approx(0.01)  # Table T1's printed number
+    # the kernel divides the squared distance by l*^2 = the code's parameter
+    k = AdhesionKernel(sc.A0, sc.l_star, sc.a)
+    ell = np.array([0.0, 0.003, 0.02])
+    p = sc.kernel_parameter
+    expected = sc.A0 * (1 - ell / (sc.a**2 * p)) * np.exp(-ell / p)
+    assert np.allclose(k(ell), expected, rtol=1e-14, atol=0)
+    # default nodes: 600 at l* = 0.1, 2400 at the literal 0.01, the spacing resolving l*
+    for l_star in (0.1, 0.05, 0.03, 0.01, 0.005):
+        N = CHAScenario.nodes_for(l_star)
+        assert N >= 600 and N % 100 == 0 and 1.4 * 14.47 / N < l_star
+    assert CHAScenario.for_kernel(0.01, N=300, rho=1.2) == replace(CHAScenario.literal(),
+                                                                   N=300, rho=1.2)
 
 
 def test_fold_balance_against_the_discrete_adhesion_energy():
@@ -111,8 +134,8 @@ def test_fold_balance_against_the_discrete_adhesion_energy():
     assert gain == pytest.approx(fb.pair_gain_per_length, rel=0.03)
     assert fb.hairpin_energy == pytest.approx(np.pi * sc.eps / d)
     assert fb.fold_length == fb.hairpin_energy / fb.pair_gain_per_length
-    assert CHAScenario().fold_balance().fold_length == pytest.approx(64.9, abs=0.1)
-    assert CHAScenario(l_star=0.1).fold_balance().fold_length == pytest.approx(0.649, abs=1e-3)
+    assert CHAScenario.literal().fold_balance().fold_length == pytest.approx(64.9, abs=0.1)
+    assert CHAScenario().fold_balance().fold_length == pytest.approx(0.649, abs=1e-3)
 
 
 def test_convergence_scenario_is_the_appendix_example():
