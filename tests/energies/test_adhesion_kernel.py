@@ -305,3 +305,28 @@ def test_rigid_invariance_identities_on_a_closed_curve(kernel):
         assert abs(np.sum(V * f * w)) <= 1e-10 * scale
     # and it is not trivially small
     assert scale > 1e-3 * kernel.A0
+
+
+@pytest.mark.parametrize("a", [0.6, 1.0, 1.5])
+@pytest.mark.parametrize("D", [0.3, 0.9, 1.2, 2.0])
+def test_parallel_strands_force_and_B_closed_forms(a, D):
+    # Two straight strands y = 0 and y = D l*. With L = l*, the integrals of the Gaussian
+    # kernel along a strand give, at a node of the lower strand (D in units of l*):
+    #   force . e_y = -4 sqrt(pi) (A0 / a^2) D exp(-D^2) (D^2 - a^2 - 1/2),
+    #   B = 2 sqrt(pi) A0 l* [(1 - 1/(2 a^2)) + exp(-D^2) (1 - D^2/a^2 - 1/(2 a^2))].
+    # The trapezoid rule is spectrally accurate for the Gaussian, so the discrete fields
+    # match to round-off once the strands are long compared with l*.
+    A0, l_star = 3.0, 0.05
+    k = AdhesionKernel(A0=A0, l_star=l_star, a=a)
+    h = l_star / 8
+    s = h * np.arange(-320, 321)  # 40 l* either side of the middle node
+    x = np.concatenate([s, s])
+    y = np.concatenate([np.zeros_like(s), np.full_like(s, D * l_star)])
+    B, F = adhesion_fields(k, x, y, h)
+    mid = s.size // 2
+    e = np.exp(-D**2)
+    force = -4 * np.sqrt(np.pi) * (A0 / a**2) * D * e * (D**2 - a**2 - 0.5)
+    b = 2 * np.sqrt(np.pi) * A0 * l_star * ((1 - 0.5 / a**2) + e * (1 - D**2 / a**2 - 0.5 / a**2))
+    assert F[mid, 1] == pytest.approx(force, rel=1e-10, abs=1e-12 * A0 / l_star)
+    assert abs(F[mid, 0]) < 1e-12 * A0 / l_star  # symmetric about the middle node
+    assert B[mid] == pytest.approx(b, rel=1e-10)
