@@ -180,7 +180,7 @@ class FixedLength(Constraint):
 
 @dataclass(frozen=True)
 class FixedArea(Constraint):
-    """The exact constraint ``A(U) = 1/2 int gamma . n dsigma = A`` with a Lagrange multiplier.
+    """The exact constraint ``A(U) = 1/2 int gamma·n dsigma = A`` with a Lagrange multiplier.
 
     Parameters
     ----------
@@ -371,7 +371,7 @@ def normal_basis(constraints, curve: Curve, rtol=1e-8) -> np.ndarray:
 
 
 def flow_multipliers(constraints, curve: Curve, V) -> np.ndarray:
-    """The multipliers ``mu`` of the constrained gradient flow: ``<n_i, V + mu . n> = 0``, (m,).
+    """The multipliers ``mu`` of the constrained gradient flow: ``<n_i, V + mu·n> = 0``, (m,).
 
     ``V + sum_i mu_i n_i`` is the ``<.,.>``-orthogonal projection of ``V`` onto
     ``T = {phi : <n_i, phi> = 0}`` (``mu`` minimises ``|V + mu . n|``): the normal velocity
@@ -408,7 +408,7 @@ def flow_multipliers(constraints, curve: Curve, V) -> np.ndarray:
 
 
 def project_velocity(constraints, curve: Curve, V) -> np.ndarray:
-    """``V + mu . n`` with the :func:`flow_multipliers`: the constrained normal velocity, (N,).
+    """``V + mu·n`` with the :func:`flow_multipliers`: the constrained normal velocity, (N,).
 
     Parameters
     ----------
