@@ -18,14 +18,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from qsa import Curve, Fourier
+from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
+from qsa.equilibria import polish
+from qsa.flows import CHA, solve_flow
+from qsa.spectra import spectrum
+from qsa.spectra.kernel import rigid_normal_basis
+
 __all__ = ["FoldedEquilibrium", "folded_energy", "folded_equilibrium", "folded_equilibria",
            "relaxation_rate"]
 
 
 def folded_energy(eps, beta, L_star, A0, l_star, a):
     """``CanhamHelfrich(eps) + Perimeter(beta, L_star) + Adhesion(A0, l_star, a)``."""
-    from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
-
     return CanhamHelfrich(eps) + Perimeter(beta, L_star) + Adhesion(A0, l_star, a)
 
 
@@ -151,8 +156,6 @@ def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=2.0
         ``mode, eigenvalue, multiplicity, measured_rate, relative_error, t_final,
         success, n_steps``, and ``"_flow"`` = (FlowResult, times, projected amplitude).
     """
-    from qsa.flows import CHA, solve_flow
-    from qsa.spectra.kernel import rigid_normal_basis
 
     sp = fe.spectrum
     if sp is None:
@@ -225,10 +228,6 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
     FoldedEquilibrium
         A failed polish gives ``success=False``, the last iterate and no spectrum.
     """
-    from qsa import Curve, Fourier
-    from qsa.equilibria import polish
-    from qsa.spectra import spectrum
-
     x, y = np.asarray(x, float), np.asarray(y, float)
     if x.shape != y.shape or x.ndim != 1:
         raise ValueError(f"x, y: need two 1-D arrays of the same length, got shapes "

@@ -5,19 +5,22 @@ The state is the reference CHA equilibrium (appendix parameters, l* = 0.5) sampl
 """
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from qsa import Fourier
+from qsa import Curve, Fourier
 from qsa.paper.folded import folded_equilibrium
-from tests.equilibria.test_polish_two_point import REF, reference
+
+REF = json.loads((Path(__file__).parents[1] / "reference"
+                  / "cha_trillium_equilibrium.json").read_text())
 
 RHO = 1.5
 
 
 def nodes(N=160, noise=0.0):
-    _, c = reference()
+    c = Curve(REF["kappa"], REF["L"], Fourier(REF["N"]), REF["theta0"], tuple(REF["origin"]))
     x, y = c.on_grid(Fourier(N + 1)).positions()
     x, y = x[:N], y[:N]          # N nodes, not quite at equal spacing: a flow's last state
     if noise:
