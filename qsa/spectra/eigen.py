@@ -467,7 +467,7 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     n_unstable = int(np.sum((~is_kernel) & (re > err) & (re > 0)))
     n_kernel = int(np.sum(is_kernel))
     kvals = n_kernel if gauge == "normal" else None
-    kr = build_kernel_report(curve, LH, op, basis, kvals, tol)
+    kr = build_kernel_report(curve, LH, op, basis, kvals, tol, energy)
 
     if unresolved.size:
         if status == 0:
