@@ -15,6 +15,7 @@ projection of ``V^n`` on that mode's eigenspace, to compare with the eigenvalue.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +25,11 @@ from qsa.equilibria import polish
 from qsa.flows import CHA, solve_flow
 from qsa.spectra import spectrum
 from qsa.spectra.kernel import rigid_normal_basis
+
+if TYPE_CHECKING:
+    from qsa.energies.base import Energy
+    from qsa.equilibria.newton import PolishResult
+    from qsa.spectra.result import Spectrum
 
 __all__ = ["FoldedEquilibrium", "folded_energy", "folded_equilibrium", "folded_equilibria",
            "relaxation_rate"]
@@ -62,10 +68,10 @@ class FoldedEquilibrium:
     name: str
     params: dict
     N: int
-    energy: object
-    guess: object
-    polished: object
-    spectrum: object = None
+    energy: Energy
+    guess: Curve
+    polished: PolishResult
+    spectrum: Spectrum | None = None
     n_slow: int = 6
     rate: dict | None = None
     flow: tuple | None = field(default=None, repr=False)
@@ -83,8 +89,13 @@ class FoldedEquilibrium:
 
     @property
     def slowest(self) -> np.ndarray:
-        """Indices (into the spectrum) of the ``n_slow`` non-kernel eigenvalues nearest 0."""
+        """Indices (into the spectrum) of the ``n_slow`` non-kernel eigenvalues nearest 0.
+
+        Empty without a spectrum (the polish failed).
+        """
         sp = self.spectrum
+        if sp is None:
+            return np.zeros(0, dtype=int)
         idx = np.flatnonzero(~sp.is_kernel)
         return idx[np.argsort(np.abs(sp.eigenvalues[idx]))][: self.n_slow]
 
