@@ -162,6 +162,7 @@ def solve(energy, curve: Curve, gauge, k=None, sigma=None, rtol=1e-5, lagrange=N
         sol = certified_eigenpairs(op, basis, k=k, sigma=0.0 if sigma is None else sigma,
                                    rigid=rigid, constrain=cbasis)
         order = np.argsort(-sol.values, kind="stable")
+        assert sol.vectors is not None  # certified_eigenpairs always returns vectors
         return EigenSolution(sol.values[order], sol.vectors[:, order], sol.errors[order],
                              sol.is_kernel[order], sol.method)
     if gauge == "scaled":

@@ -36,8 +36,12 @@ def analyse(x, y, **options):
                               a=REF["a"], **options)
 
 
-def test_polish_spectrum_and_flow_rate():
-    fe = analyse(*nodes(noise=2e-3))
+@pytest.fixture(scope="module")
+def fe():
+    return analyse(*nodes(noise=2e-3))
+
+
+def test_polish_spectrum_and_flow_rate(fe):
     assert fe.polished.success and fe.relative_residual <= 1e-9
     assert fe.N == 161
     sp = fe.spectrum
@@ -54,6 +58,20 @@ def test_polish_spectrum_and_flow_rate():
     assert s["params"]["L_star"] == pytest.approx(REF["L_star"], rel=1e-14)
 
 
+def test_slowest_modes_figure(fe):
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    from qsa.plotting.simulations import folded_modes_figure
+
+    fig = folded_modes_figure([fe], n_modes=2)
+    lcs = [c for ax in fig.axes for c in ax.collections if isinstance(c, LineCollection)]
+    assert len(lcs) == 2
+    phi = fe.spectrum.eigenvectors[:, fe.slowest[0]]
+    assert np.allclose(lcs[0].get_array(), phi / np.abs(phi).max())
+    plt.close(fig)
+
+
 def test_failed_polish_reported_without_spectrum():
     fe = analyse(*nodes(noise=2e-3), maxiter=1, rate_check=False)
     assert not fe.polished.success and fe.spectrum is None and not fe.success
@@ -65,3 +83,17 @@ def test_failed_polish_reported_without_spectrum():
 def test_bad_nodes():
     with pytest.raises(ValueError, match="x, y"):
         analyse(np.zeros(10), np.zeros(11))
+
+
+@pytest.mark.slow
+def test_reproduce_folded_table_t1(tmp_path):
+    """The full f:fold reproduction: every final state polished, kernel 3, rate within 1%."""
+    from qsa.cli import main
+
+    assert main(["reproduce", "folded", "--out", str(tmp_path), "--no-progress",
+                 "--no-plots", "--json"]) == 0
+    s = json.loads((tmp_path / "folded.json").read_text())
+    assert not s["failed"] and len(s["equilibria"]) == 3
+    for e in s["equilibria"]:
+        assert e["relative_residual"] <= 1e-9 and e["n_kernel"] == 3
+        assert e["rate"]["relative_error"] <= 0.01
