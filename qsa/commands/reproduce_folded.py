@@ -14,17 +14,8 @@ from __future__ import annotations
 
 import os
 
+from qsa.commands import _simulations as sim
 from qsa.commands._options import positive_float
-from qsa.commands._simulations import (
-    cha_arguments,
-    cha_scenario,
-    check_resume,
-    common_arguments,
-    emit,
-    progress,
-    save_figures,
-    start_note,
-)
 
 HELP = "folded equilibria of f:fold: Newton polish, spectrum, stability, DAE rate check"
 
@@ -32,9 +23,9 @@ HELP = "folded equilibria of f:fold: Newton polish, spectrum, stability, DAE rat
 def add_arguments(parser):
     from qsa.paper.scenarios import CHAScenario
 
-    common_arguments(parser, "qsa-folding",
+    sim.common_arguments(parser, "qsa-folding",
                      f"{CHAScenario().t_final:g}, the paper's last figure time")
-    cha_arguments(parser)
+    sim.cha_arguments(parser)
     parser.add_argument("--rho", type=positive_float, nargs="+", default=[1.2, 1.3, 1.4],
                         help="precompression factors (default 1.2 1.3 1.4)")
     parser.add_argument("--no-rate", action="store_true",
@@ -46,12 +37,13 @@ def run(args):
     from qsa.paper.folded import folded_equilibria
     from qsa.paper.runs import cha_run_name, write_output
 
-    scenarios = [cha_scenario(args, rho) for rho in args.rho]
-    check_resume(args, [cha_run_name(sc) for sc in scenarios])
-    start_note(args, f"{len(scenarios)} CHA flows (rho = {', '.join(f'{r:g}' for r in args.rho)})"
-                     f", N = {args.N or scenarios[0].N}, then their polished equilibria")
+    scenarios = [sim.cha_scenario(args, rho) for rho in args.rho]
+    sim.check_resume(args, [cha_run_name(sc) for sc in scenarios])
+    rhos = ", ".join(f"{r:g}" for r in args.rho)
+    sim.start_note(args, f"{len(scenarios)} CHA flows (rho = {rhos}), N = "
+                         f"{args.N or scenarios[0].N}, then their polished equilibria")
     folding = run_folding(scenarios, args.out, t_final=args.t_final, N=args.N,
-                          resume=args.resume, progress=progress(args))
+                          resume=args.resume, progress=sim.progress(args))
     results, failed = [], []
     for r in folding.runs:
         try:
@@ -63,8 +55,8 @@ def run(args):
     if not args.no_plots:
         from qsa.plotting.simulations import folded_modes_figure
 
-        summary["figures"] = save_figures({"modes": folded_modes_figure(results)}, args.out,
-                                          "folded", args.plot)
+        summary["figures"] = sim.save_figures({"modes": folded_modes_figure(results)},
+                                              args.out, "folded", args.plot)
     os.makedirs(args.out, exist_ok=True)
     write_output(args.out, "folded", {}, summary)
     lines = []
@@ -81,5 +73,5 @@ def run(args):
                      f"{rt['eigenvalue']:.5g} ({100 * rt['relative_error']:.2f}%)")
         lines.append(line)
     lines += [f"{f['name']}: not analysed: {f['error']}" for f in failed]
-    emit(args, summary, lines)
+    sim.emit(args, summary, lines)
     return 0 if summary["success"] else 1
