@@ -21,7 +21,13 @@ import importlib
 import sys
 
 from qsa._version import __version__
-from qsa.commands._errors import EXIT_BROKEN_PIPE, epilog, run_command, silence_stdout
+from qsa.commands._errors import (
+    EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE,
+    epilog,
+    run_command,
+    silence_stdout,
+)
 from qsa.commands._options import CommandParser, check_paths
 
 #: Subcommand modules under ``qsa.commands``, in the order ``--help`` lists them.
@@ -65,9 +71,9 @@ def main(argv=None) -> int:
         silence_stdout()
         return EXIT_BROKEN_PIPE
     except SystemExit as exc:  # a usage error (exit 2) is returned; --help, --version exit
-        if exc.code == 0:
+        if exc.code in (0, None):
             raise
-        return exc.code
+        return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
     return run_command(_run, args)
 
 

@@ -130,7 +130,7 @@ class _Pieces:
         out[0] = 0.5 * (f @ c.dsigma)
         return out
 
-    def low_rank(self):
+    def low_rank(self) -> tuple[np.ndarray, np.ndarray]:
         """``(U, V)`` with ``H``'s rank-three part ``U V^T`` before symmetrisation.
 
         ``(E^T 1) r^T`` and the ``e_0 dsigma^T / 2`` parts of the two ``Dm``:

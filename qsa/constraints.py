@@ -40,6 +40,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 
@@ -81,6 +82,8 @@ class Constraint(ABC):
 
     #: short name of the constrained quantity (``"L"``, ``"A"``)
     symbol = ""
+    #: name of the dataclass field holding the target (``"L"``, ``"A"``)
+    _field: ClassVar[str] = ""
 
     @property
     @abstractmethod
@@ -111,7 +114,7 @@ class Constraint(ABC):
         """This constraint with ``target = value(c)`` if it was ``None``."""
         if self.target is not None:
             return self
-        return replace(self, **{self._field: self.value(c)})
+        return replace(self, **{self._field: self.value(c)})  # type: ignore[type-var]
 
     def defect(self, c: Curve) -> float:
         """``value(c) - target`` (the constraint must be bound)."""
@@ -154,7 +157,7 @@ class FixedLength(Constraint):
     (2.0, 0.0)
     """
 
-    L: float = None
+    L: float | None = None
     symbol = "L"
     _field = "L"
 
@@ -202,7 +205,7 @@ class FixedArea(Constraint):
     4.0
     """
 
-    A: float = None
+    A: float | None = None
     symbol = "A"
     _field = "A"
 

@@ -20,7 +20,8 @@ In both cases the first sample is kept as the first node.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -119,6 +120,12 @@ class PeriodicInterpolant:
     x: np.ndarray
     y: np.ndarray
     kind: str = "fourier"
+    # set in __post_init__, by kind
+    _zh: np.ndarray = field(init=False, repr=False, compare=False)
+    _k: np.ndarray = field(init=False, repr=False, compare=False)
+    _kmax: int = field(init=False, repr=False, compare=False)
+    _spl: Any = field(init=False, repr=False, compare=False)
+    _knots: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         if self.kind not in ("fourier", "spline"):

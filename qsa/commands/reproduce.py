@@ -11,7 +11,7 @@ from __future__ import annotations
 import importlib
 
 #: Reproductions, in the order ``qsa reproduce --help`` lists them.
-REPRODUCTIONS = ["convergence", "timesteps", "facet", "snowflake", "folding", "fronts",
+REPRODUCTIONS = ["convergence", "timesteps", "facet", "snowflake", "folding", "folded", "fronts",
                  "coarsening"]
 
 

@@ -11,10 +11,15 @@ each with its critical eigenvectors (:class:`CriticalMode`) and their symmetry l
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from qsa.curve import Curve
+
+if TYPE_CHECKING:
+    from qsa.equilibria.result import Equilibrium
+    from qsa.spectra.symmetry import BlochSymmetry
 
 __all__ = ["Branch", "BranchPoint", "Bifurcation", "CriticalMode", "Fold", "MESSAGES"]
 
@@ -160,11 +165,11 @@ class Bifurcation:
     kind: str
     modes: tuple
     index: int
-    equilibrium: object
+    equilibrium: Equilibrium
     eigenvalue: float
     change: int
-    tangent: np.ndarray = field(repr=False, default=None)
-    symmetry: object = None
+    tangent: np.ndarray | None = field(repr=False, default=None)
+    symmetry: BlochSymmetry | None = None
 
     @property
     def curve(self) -> Curve:
@@ -226,7 +231,7 @@ class BranchPoint:
     """
 
     param: float
-    equilibrium: object
+    equilibrium: Equilibrium
     dp_ds: float
     det_sign: int
     n_unstable: int | None = None
@@ -313,7 +318,7 @@ class Branch:
     n_rejected: int = 0
     n_newton: int = 0
     bifurcations: tuple = ()
-    symmetry: object = None
+    symmetry: BlochSymmetry | None = None
     n_eigensolves: int = 0
     n_locate_solves: int = 0
     energy_factory: object = field(default=None, repr=False)

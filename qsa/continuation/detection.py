@@ -101,7 +101,7 @@ def count_unstable(energy, curve, symmetry: BlochSymmetry, k=None, constraints=N
     kk = None if symmetry.shift <= DENSE_SECTOR_LIMIT else (k or 8)
     spec = sector_spectrum(energy, curve, symmetry, k=kk, constraints=constraints)
     counts = tuple(spec.n_unstable_in(b) for b in symmetry.sectors)
-    rows = []
+    rows: list = []
     for b in symmetry.sectors:
         sel = np.flatnonzero(spec.sector == b)
         near = sel[np.argsort(np.abs(spec.eigenvalues[sel]))[:N_CRITICAL]]
@@ -252,7 +252,7 @@ def switching_directions(bif, symmetry: BlochSymmetry, tol=1e-6):
             cands += [odd[0], -odd[0]]
     else:
         cands = [modes[0].vector, -modes[0].vector]
-    kept = []
+    kept: list = []
     for v in cands:
         v = v / max(np.linalg.norm(v), 1e-300)
         if not any(min(np.linalg.norm(u / np.linalg.norm(u) - v) for u in _orbit(k, symmetry))

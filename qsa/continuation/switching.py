@@ -140,6 +140,8 @@ def switch_branch(branch: Branch, bifurcation: Bifurcation, span=None, *, constr
     eps = step if amplitude is None else real_number(amplitude, "amplitude", positive=True)
     sym_old = bifurcation.symmetry if bifurcation.symmetry is not None else branch.symmetry
     eq = bifurcation.equilibrium
+    if sym_old is None:
+        sym_old = detect_symmetry(eq.curve)
     p_star = float(bifurcation.parameter)
     out = []
     for phi in switching_directions(bifurcation, sym_old):

@@ -78,8 +78,8 @@ class _Stability:
         self.k = k
         self.n_solves = 0
         self.n_locate = 0
-        self.unlocated = []  # intervals with a count change that was not located
-        self.values = []  # per point: {b: eigenvalues of sector b, decreasing}, or None
+        self.unlocated: list = []  # intervals with a count change that was not located
+        self.values: list = []  # per point: {b: eigenvalues of sector b, decreasing}, or None
         self.incomplete = False
 
     def record(self, energy, curve):

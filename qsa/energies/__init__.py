@@ -9,8 +9,10 @@ On the closed manifold, ``normal_velocity``, ``multipliers`` (Lambda of
 """
 
 from qsa.energies.adhesion import Adhesion, AdhesionKernel
+from qsa.energies.adhesion_invariants import TwoPointInvariants, adhesion_invariants
 from qsa.energies.area import AreaEnergy, AreaPenalty, Pressure
 from qsa.energies.base import Energy, EnergySum, Perimeter
+from qsa.energies.cha import CHAEnergy, cha_factory
 from qsa.energies.constrained import multipliers, normal_velocity, residual_floor, residual_scale
 from qsa.energies.faceting import Faceting
 from qsa.energies.functionalized import FunctionalizedCurvature
@@ -22,6 +24,10 @@ from qsa.energies.wells import DoubleWell, QuarticWell, Well, is_quartic, resolv
 __all__ = [
     "Adhesion",
     "AdhesionKernel",
+    "TwoPointInvariants",
+    "adhesion_invariants",
+    "CHAEnergy",
+    "cha_factory",
     "AreaEnergy",
     "AreaPenalty",
     "Pressure",

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -331,7 +332,7 @@ class Energy(ABC):
         >>> CanhamHelfrich(0.5).params()
         {'energy': 'CanhamHelfrich', 'eps': 0.5}
         """
-        out = {"energy": type(self).__name__}
+        out: dict[str, Any] = {"energy": type(self).__name__}
         for k, v in getattr(self, "__dict__", {}).items():
             if isinstance(v, (int, float, str)):
                 out[k] = v

@@ -27,7 +27,9 @@ Hessian divide rows by ``dsigma``. In the continuum these are e:FoE_IG,
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -64,12 +66,12 @@ class Density:
     (9.0, 'node')
     """
 
-    f: object
-    f_p: object
-    f_k: object
-    f_pp: object
-    f_pk: object
-    f_kk: object
+    f: Callable[..., Any]
+    f_p: Callable[..., Any]
+    f_k: Callable[..., Any]
+    f_pp: Callable[..., Any]
+    f_pk: Callable[..., Any]
+    f_kk: Callable[..., Any]
     placement: str = "edge"
     uses_p: bool = True
 

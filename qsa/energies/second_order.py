@@ -89,6 +89,7 @@ has the eigenvalues (:func:`circle_eigenvalues`) ::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -215,12 +216,12 @@ def circle_eigenvalues(R, kmax, F_qq, F_pp, F_qk, F_kk, beta=0.0) -> np.ndarray:
 class _Maps:
     """The discrete ``p``, ``q`` and the evaluation points of one density at one curve."""
 
-    E: object        # edge difference (N, N)
-    A: object        # edge average, None for the identity (Fourier)
-    L_g: object      # evaluation maps (None = identity)
-    L_Q: object
-    L_P: object
-    L_K: object
+    E: Any           # edge difference (N, N)
+    A: Any           # edge average, None for the identity (Fourier)
+    L_g: Any         # evaluation maps (None = identity)
+    L_Q: Any
+    L_P: Any
+    L_K: Any
     w: np.ndarray    # quadrature weights
     g: np.ndarray
     ge: np.ndarray   # edge values of g

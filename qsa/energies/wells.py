@@ -13,7 +13,9 @@ the equilibrium constructions also need equal-depth minima at 0 and ``kstar``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -95,11 +97,11 @@ class Well:
     (1.0, True)
     """
 
-    W: object
-    dW: object
-    d2W: object
+    W: Callable[..., Any]
+    dW: Callable[..., Any]
+    d2W: Callable[..., Any]
     kstar: float | None = None
-    d3W: object = None
+    d3W: Callable[..., Any] | None = None
 
     def __post_init__(self):
         for name in ("W", "dW", "d2W"):

@@ -29,11 +29,15 @@ Newton's method.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from qsa._checks import real_number
 from qsa.energies.wells import is_quartic, resolve_well
+
+if TYPE_CHECKING:
+    from qsa.energies.wells import DoubleWell, Well
 
 __all__ = ["Heteroclinic", "heteroclinic"]
 
@@ -87,10 +91,10 @@ class Heteroclinic:
 
     alpha: float
     kstar: float
-    well: object
+    well: DoubleWell | Well
     rates: tuple
     closed_form: bool
-    _tab: dict = field(default=None, repr=False)
+    _tab: dict | None = field(default=None, repr=False)
 
     # ------------------------------------------------------------ evaluation
     @property

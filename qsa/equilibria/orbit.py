@@ -49,6 +49,7 @@ an independent reference.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
@@ -56,6 +57,9 @@ from scipy.special import expit
 
 from qsa._checks import real_number
 from qsa.energies.wells import is_quartic, resolve_well
+
+if TYPE_CHECKING:
+    from qsa.energies.wells import DoubleWell, Well
 
 __all__ = ["PeriodicOrbit", "periodic_orbit", "periodic_range"]
 
@@ -71,7 +75,7 @@ _TAIL = 38.0  # exp(-38) ~ 3e-17: the part of sigma(v) beyond the panels is negl
 class _Family:
     """Critical points of ``P`` for one ``nu1``: centre ``c``, minima ``s_lo < c < s_hi``."""
 
-    well: object
+    well: DoubleWell | Well
     kstar: float
     nu1: float
     c: float
@@ -80,9 +84,9 @@ class _Family:
     nu2_c: float
     nu2_sep: float
     closed: bool  # quartic well and nu1 == 0: exact roots
-    star: float = None  # polynomial path: the well of P whose level is the separatrix
-    q: np.ndarray = None  # Taylor coefficients of W + nu1 psi about `star` (ascending)
-    q_wells: tuple = None  # the same about s_lo and about s_hi
+    star: float | None = None  # polynomial path: the well of P whose level is the separatrix
+    q: np.ndarray | None = None  # Taylor coefficients of W + nu1 psi about `star` (ascending)
+    q_wells: tuple | None = None  # the same about s_lo and about s_hi
 
     def P(self, psi, nu2):
         return self.well.W(psi) + self.nu1 * psi + nu2
@@ -103,7 +107,7 @@ def _poly_family(well, kstar, nu1, coef) -> _Family:
     """Critical points from the polynomial; Taylor coefficients about the separatrix well."""
     P0 = np.polynomial.Polynomial(coef + np.r_[0.0, nu1, np.zeros(len(coef) - 2)])
     dP, d2P = P0.deriv(), P0.deriv(2)
-    crit = []
+    roots: list[float] = []
     for r in dP.roots():
         if abs(r.imag) > 1e-9 * kstar:
             continue
@@ -112,8 +116,8 @@ def _poly_family(well, kstar, nu1, coef) -> _Family:
             d2 = d2P(x)
             if d2 != 0:
                 x -= dP(x) / d2
-        crit.append(x)
-    crit = np.sort(np.array(crit))
+        roots.append(float(x))
+    crit = np.sort(np.array(roots))
     best = None
     for j in range(1, len(crit) - 1):
         if d2P(crit[j]) < 0 < d2P(crit[j - 1]) and d2P(crit[j + 1]) > 0:
@@ -124,7 +128,7 @@ def _poly_family(well, kstar, nu1, coef) -> _Family:
             f"nu1={nu1}: W'(psi) + nu1 has no maximum of P between two minima, so "
             "alpha^2 psi'' - W'(psi) = nu1 has no periodic orbits (|nu1| too large)"
         )
-    c, s_lo, s_hi = crit[best], crit[best - 1], crit[best + 1]
+    c, s_lo, s_hi = float(crit[best]), float(crit[best - 1]), float(crit[best + 1])
     if nu1 == 0.0 and abs(s_lo) < 1e-8 * kstar and abs(s_hi - kstar) < 1e-8 * kstar:
         s_lo, s_hi = 0.0, kstar  # the wells themselves, exactly
 
@@ -153,7 +157,7 @@ def _family(well, kstar, nu1) -> _Family:
     k = np.linspace(-1.0, 2.0, 3001) * kstar
     dP = np.asarray(well.dW(k), dtype=float) + nu1
     idx = np.nonzero(np.sign(dP[:-1]) * np.sign(dP[1:]) <= 0)[0]
-    crit = []
+    roots: list[float] = []
     for i in idx:
         if dP[i] == 0:
             r = k[i]
@@ -161,9 +165,9 @@ def _family(well, kstar, nu1) -> _Family:
             continue
         else:
             r = brentq(lambda x: float(well.dW(x)) + nu1, k[i], k[i + 1], xtol=1e-15, rtol=1e-15)
-        if not crit or abs(r - crit[-1]) > 1e-12 * kstar:
-            crit.append(r)
-    crit = np.array(crit)
+        if not roots or abs(r - roots[-1]) > 1e-12 * kstar:
+            roots.append(float(r))
+    crit = np.array(roots)
     best = None
     for j in range(1, len(crit) - 1):
         if float(well.d2W(crit[j])) < 0 and float(well.d2W(crit[j - 1])) > 0 \
@@ -222,13 +226,13 @@ class PeriodicOrbit:
     nu1: float
     nu2: float
     kstar: float
-    well: object
+    well: DoubleWell | Well
     a: float
     b: float
     period: float
     turning: float
     depth: float
-    _t: dict = field(repr=False, default=None)
+    _t: dict | None = field(repr=False, default=None)
 
     # --------------------------------------------------------- evaluation
     def _v_of_sigma(self, sig):

@@ -4,8 +4,13 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from qsa.curve import Curve
+    from qsa.energies.base import Energy
 
 __all__ = ["Equilibrium"]
 
@@ -56,8 +61,8 @@ class Equilibrium:
     True
     """
 
-    curve: object
-    energy: object
+    curve: Curve
+    energy: Energy
     params: dict
     multipliers: np.ndarray
     residual: float

@@ -141,7 +141,7 @@ def equal_arclength(curve: Curve) -> Curve:
         if np.max(np.abs(ds)) < 1e-15:
             break
     kappa = grid.interpolate(curve.kappa, s)
-    return Curve(kappa, L, grid, curve.theta0, curve.origin)
+    return Curve(kappa, np.full(grid.N, float(L)), grid, curve.theta0, curve.origin)
 
 
 class EquilibriumSystem:

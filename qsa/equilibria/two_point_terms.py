@@ -24,6 +24,7 @@ carry ``max|V^n|`` (the polished state solves ``V^n = -a.phi`` exactly).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -79,9 +80,9 @@ class StateBorder:
     cL : ndarray, shape (m,)
     """
 
-    VY: object
-    cY: object
-    cK: object
+    VY: Any  # sparse or dense
+    cY: Any
+    cK: Any
     cL: np.ndarray
 
     @property

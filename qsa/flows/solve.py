@@ -31,6 +31,7 @@ import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,6 +44,9 @@ from qsa.flows.stepper import LINEAR_SOLVERS, METHODS, Integrator, NewtonSolver
 from qsa.npz import load_npz, save_npz
 from qsa.polygon import self_intersections
 from qsa.resample import closed_samples, resample_closed
+
+if TYPE_CHECKING:
+    from qsa.flows.base import DAESystem
 
 __all__ = ["solve_flow", "FlowResult", "FlowInterrupted", "prepare_initial"]
 
@@ -136,7 +140,7 @@ class FlowResult:
     y: np.ndarray
     method: str
     tol: float
-    system: object = field(repr=False, compare=False)
+    system: DAESystem = field(repr=False, compare=False)
 
     @property
     def n_factorizations(self) -> int:

@@ -172,8 +172,8 @@ class FacetScenario:
     beta: float = 5.0
     kstar: float = 5.0
     N: int = 600
-    L_star: float = None
-    R: float = None
+    L_star: float | None = None
+    R: float | None = None
     noise: float = 3e-5
     modes: tuple = (2, 15)
     seed: int = 1
@@ -182,7 +182,7 @@ class FacetScenario:
     t_final: float = 400.0
     tol: float = 1e-4
     method: str = "be"
-    spinodal_time: float = None
+    spinodal_time: float | None = None
     #: the paper's figure times (f:facet), on its clock
     figure_times: tuple = (2.2e-4, 9.8e-3, 3.2e-2, 1.35e-1, 2.0)
     paper_clock: float = 2.0

@@ -8,11 +8,13 @@ and ``folding_figure`` take the results of :func:`qsa.paper.run_facet` and
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.collections import LineCollection
 from matplotlib.ticker import MaxNLocator
 
 from qsa.plotting._core import new_figure
 
 __all__ = [
+    "folded_modes_figure",
     "plot_facet_panels",
     "plot_energy_residual",
     "plot_front_count",
@@ -260,4 +262,37 @@ def folding_figure(runs, times=(0.02, 0.3, None)):
         plot_energy_history(run.t_steps, run.energy_steps, ax=ax, label=f"rho={run.rho:g}",
                             color=f"C{r}")
     ax.legend(fontsize=8)
+    return fig
+
+
+def folded_modes_figure(results, n_modes=2, size=3.2):
+    """The slowest modes of polished folded states, coloured on their curves.
+
+    One row per result (a :class:`qsa.paper.folded.FoldedEquilibrium` with a
+    spectrum), one column per mode (the ``n_modes`` non-kernel eigenvalues nearest 0):
+    the curve coloured by the eigenvector ``phi`` (normal gauge, scaled to max 1).
+    """
+    rows = [r for r in results if r.spectrum is not None]
+    fig, axes = new_figure(ncols=n_modes, nrows=max(len(rows), 1),
+                           size=(size * n_modes, size * max(len(rows), 1)))
+    axes = np.atleast_2d(axes).reshape(max(len(rows), 1), n_modes)
+    for r, row in zip(rows, axes, strict=False):
+        x, y = r.curve.positions()
+        pts = np.column_stack([_closed(x), _closed(y)])
+        segs = np.stack([pts[:-1], pts[1:]], axis=1)
+        for j, ax in enumerate(row):
+            ax.set_aspect("equal")
+            ax.axis("off")
+            if j >= len(r.slowest):
+                continue
+            i = r.slowest[j]
+            phi = r.spectrum.eigenvectors[:, i]
+            phi = phi / np.abs(phi).max()
+            lc = LineCollection(segs, cmap="coolwarm", norm=None)
+            lc.set_array(phi)
+            lc.set_clim(-1, 1)
+            lc.set_linewidth(1.5)
+            ax.add_collection(lc)
+            ax.autoscale_view()
+            ax.set_title(rf"{r.name}: $\lambda$ = {r.spectrum.eigenvalues[i]:.4g}", fontsize=8)
     return fig

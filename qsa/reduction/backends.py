@@ -114,8 +114,8 @@ class NumpyBackend:
     length: float
     quadrature: object
     band: tuple
-    beta: float = None
-    L_star: float = None
+    beta: float | None = None
+    L_star: float | None = None
     name = "numpy"
 
     def fields(self, p, cutoff, L=None):

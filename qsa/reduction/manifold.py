@@ -214,9 +214,9 @@ class SpliceFields:
     Theta: np.ndarray
     length: float
     s: np.ndarray
-    g_L: np.ndarray = None
-    dg_L: np.ndarray = None
-    Theta_L: np.ndarray = None
+    g_L: np.ndarray | None = None
+    dg_L: np.ndarray | None = None
+    Theta_L: np.ndarray | None = None
 
 
 def splice_fields(front, positions, length, cutoff, quadrature, variable=False):

@@ -131,11 +131,11 @@ class FrontODE:
     kstar: float
     length: float
     well: object = None
-    cutoff: tuple = None
+    cutoff: tuple | None = None
     points_per_width: float = 3.0
-    beta: float = None
-    L_star: float = None
-    correction: str = None
+    beta: float | None = None
+    L_star: float | None = None
+    correction: str | None = None
     backend: str = "auto"
     front: object = field(init=False, repr=False)
     grid: object = field(init=False, repr=False)

@@ -162,6 +162,7 @@ def solve(energy, curve: Curve, gauge, k=None, sigma=None, rtol=1e-5, lagrange=N
         sol = certified_eigenpairs(op, basis, k=k, sigma=0.0 if sigma is None else sigma,
                                    rigid=rigid, constrain=cbasis)
         order = np.argsort(-sol.values, kind="stable")
+        assert sol.vectors is not None  # certified_eigenpairs always returns vectors
         return EigenSolution(sol.values[order], sol.vectors[:, order], sol.errors[order],
                              sol.is_kernel[order], sol.method)
     if gauge == "scaled":
@@ -466,7 +467,7 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
     n_unstable = int(np.sum((~is_kernel) & (re > err) & (re > 0)))
     n_kernel = int(np.sum(is_kernel))
     kvals = n_kernel if gauge == "normal" else None
-    kr = build_kernel_report(curve, LH, op, basis, kvals, tol)
+    kr = build_kernel_report(curve, LH, op, basis, kvals, tol, energy)
 
     if unresolved.size:
         if status == 0:

@@ -62,6 +62,7 @@ Error estimates (absolute, per eigenvalue ``lambda`` with ``<.,.>``-unit eigenve
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -130,13 +131,13 @@ class FactoredNormalOperator:
     """
 
     curve: Curve
-    G: object
+    G: Any  # sparse or dense
     gk: np.ndarray
-    H: object
+    H: Any  # sparse or dense
     U: np.ndarray
     V: np.ndarray
     w: np.ndarray
-    reduced: object = None
+    reduced: Any = None
 
     @classmethod
     def from_lagrangian(cls, curve: Curve, L) -> FactoredNormalOperator:
@@ -472,7 +473,7 @@ class ShiftInvert:
         self._free = None
         self._ext = None
         self._core_rows = None
-        self._probe = {}
+        self._probe: dict = {}
         self.last_correction = np.zeros(0)
 
     @property

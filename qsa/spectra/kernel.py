@@ -21,6 +21,7 @@ from qsa import geometry
 from qsa._checks import real_number
 from qsa.constraints import bind_constraints, normal_basis
 from qsa.curve import Curve
+from qsa.energies.adhesion_invariants import adhesion_invariants, two_point_terms
 from qsa.spectra.factored import FactoredNormalOperator
 from qsa.spectra.hessian import check_input, inner_norm, lagrange_hessian
 from qsa.spectra.result import KernelReport
@@ -211,8 +212,12 @@ def _smooth_random(curve: Curve, modes=8, seed=1):
     return v
 
 
-def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol) -> KernelReport:
-    """The :class:`KernelReport` from a Lagrangian Hessian and the kernel count."""
+def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol, energy=None) -> KernelReport:
+    """The :class:`KernelReport` from a Lagrangian Hessian and the kernel count.
+
+    With ``energy`` holding a two-point term, the report also carries its invariants
+    (:func:`qsa.energies.adhesion_invariants`).
+    """
     N = curve.N
     L = LH.matrix
     H = LH.energy_hessian
@@ -262,7 +267,14 @@ def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol) -> KernelRep
     return KernelReport(lag, en, pred, rigid, psi, rep, rigid_normal, n_kernel, m,
                         float(kernel_tol), LH.multipliers, LH.projection_residual,
                         LH.relative_projection_residual, LH.relative_residual, tuple(notes),
-                        np.array(LH.constraint_multipliers, dtype=float))
+                        np.array(LH.constraint_multipliers, dtype=float),
+                        _two_point(energy, curve))
+
+
+def _two_point(energy, curve):
+    if energy is None or not two_point_terms(energy):
+        return None
+    return adhesion_invariants(energy, curve).summary()
 
 
 def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None,
@@ -323,4 +335,4 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None,
         else:
             tol = real_number(kernel_tol, "kernel_tol", positive=True)
         n_kernel = int(np.sum(np.abs(ev) <= tol))
-    return build_kernel_report(curve, LH, op, basis, n_kernel, tol)
+    return build_kernel_report(curve, LH, op, basis, n_kernel, tol, energy)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -63,6 +64,11 @@ class KernelReport:
     notes : tuple of str
     constraint_multipliers : ndarray, shape (m,)
         Multipliers of the length / area constraints (empty without).
+    two_point : dict or None
+        For an energy with a two-point term, the relative residuals of its rigid-motion
+        invariants (``TwoPointInvariants.summary()`` of
+        :func:`qsa.energies.adhesion_invariants`: per level set, force and curvature
+        forms); None otherwise.
 
     Parameters
     ----------
@@ -95,6 +101,7 @@ class KernelReport:
     relative_residual: float
     notes: tuple = ()
     constraint_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    two_point: dict | None = None
 
     def summary(self) -> dict:
         """JSON-serialisable dict.
@@ -103,7 +110,7 @@ class KernelReport:
         -------
         dict
         """
-        out = {}
+        out: dict[str, Any] = {}
         for k, v in self.__dict__.items():
             if isinstance(v, np.ndarray):
                 out[k] = [float(x) for x in v]

@@ -69,7 +69,7 @@ class EigenSolution:
     """
 
     values: np.ndarray
-    vectors: np.ndarray
+    vectors: np.ndarray | None
     errors: np.ndarray
     is_kernel: np.ndarray
     method: str
@@ -256,7 +256,7 @@ def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True, rigid=None,
         keep = np.ones(lam.size, bool)
         keep[drop] = False
         cvals, cerr = cert.values.copy(), cert.errors.copy()
-        cvecs = None if vecs is None else cert.vectors.copy()
+        cvecs = None if vecs is None or cert.vectors is None else cert.vectors.copy()
         # far from 0 the formed matrix may be the more accurate of the two: take, for each
         # non-kernel value of the window, the dense partner when its error is smaller
         used = np.zeros(drop.size, bool)
@@ -274,7 +274,7 @@ def dense_normal(op: FactoredNormalOperator, R, rtol, vectors=True, rigid=None,
         values = np.concatenate([lam[keep], cvals])
         errors = np.concatenate([err[keep], cerr])
         is_kernel = np.concatenate([np.zeros(int(keep.sum()), bool), cert.is_kernel])
-        vecs = None if vecs is None else np.hstack([vecs[:, keep], cvecs])
+        vecs = None if vecs is None or cvecs is None else np.hstack([vecs[:, keep], cvecs])
         method = "dense + factored"
     else:
         values, errors, is_kernel = lam, err, _nearest_mask(lam, m)

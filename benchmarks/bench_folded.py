@@ -1,0 +1,97 @@
+"""Cost of the spectrum of a CHA state: Hessian assembly plus the 20 eigenvalues nearest 0.
+
+The energy is Canham-Helfrich + perimeter (``L* = rho L0``) + adhesion with Table T1's
+parameters (A0 = 40, a = 1, beta = 60, eps = 0.08, rho = 1.3). The state is a folded
+final state read with ``--from FILE`` (a flow result, checkpoint or saved equilibrium,
+resampled to each N), or by default the scenario's crenellated start (not an
+equilibrium: the timings are those of the same linear algebra, the spectrum is not
+physical; it needs N >= 1000 on finite differences). Cases: neighbour lists at Table
+T1's l* on finite differences, N = 1200 ... 10^4, and the long-range l* = 0.5 (all
+pairs) at N = 1000 ... 1400. Per N: interacting pairs, wall time of ``spectrum(E, c, k=20, sigma=0)`` (assembly, factorization, Arnoldi)
+and peak traced memory; then the fitted exponent of time against N.
+
+Timings are wall-clock, single-threaded BLAS, noisy on a shared machine.
+
+Run: ``python benchmarks/bench_folded.py [--quick] [--l-star 0.01] [--from FILE]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import tracemalloc
+import warnings
+
+import numpy as np
+
+from qsa import Curve, FiniteDifference, io
+from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
+from qsa.energies.adhesion import adhesion_pairs
+from qsa.paper.scenarios import CHAScenario
+from qsa.spectra import spectrum
+
+
+def state(scenario, N, source):
+    if source is None:
+        x, y = scenario.initial(N)
+    else:
+        loaded = io.load(source)
+        c = getattr(loaded, "curve", None)
+        x, y = c.positions() if c is not None else (loaded.x, loaded.y)
+    return Curve.from_positions(x, y, FiniteDifference(N))
+
+
+def energy_of(scenario, L0, method):
+    return (CanhamHelfrich(scenario.eps) + Perimeter(scenario.beta, scenario.rho * L0)
+            + Adhesion(scenario.A0, scenario.l_star, scenario.a, method=method))
+
+
+def measure(scenario, N, method, source):
+    c = state(scenario, N, source)
+    L0 = Curve.from_positions(*scenario.initial(N), FiniteDifference(N)).length()
+    E = energy_of(scenario, L0, method)
+    x, y = c.positions()
+    P = adhesion_pairs(E.terms()[-1].kernel, x, y, method=method)[0].size
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = spectrum(E, c, k=20, sigma=0.0)
+    elapsed = time.perf_counter() - t0
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return {"N": N, "pairs": P, "time": elapsed, "peak_MB": peak / 1e6,
+            "n_eig": int(np.size(s.eigenvalues)), "nearest0": float(np.min(np.abs(s.eigenvalues)))}
+
+
+def report(title, rows):
+    print(f"\n{title}")
+    print(f"{'N':>7} {'pairs':>10} {'time s':>9} {'peak MB':>9} {'eigs':>5} {'min|lam|':>10}")
+    for r in rows:
+        print(f"{r['N']:>7} {r['pairs']:>10} {r['time']:>9.2f} {r['peak_MB']:>9.1f} "
+              f"{r['n_eig']:>5} {r['nearest0']:>10.3e}")
+    if len(rows) >= 2:
+        p = np.polyfit(np.log([r["N"] for r in rows]), np.log([r["time"] for r in rows]), 1)[0]
+        print(f"fitted cost exponent (time ~ N^p): p = {p:.2f}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="N up to 2400, dense up to 500")
+    ap.add_argument("--l-star", type=float, default=CHAScenario().l_star,
+                    help="Table T1's kernel length for the neighbour-list cases")
+    ap.add_argument("--from", dest="source", default=None,
+                    help="a folded state (flow result, checkpoint or equilibrium file)")
+    args = ap.parse_args()
+    Ns = [1200, 2400] if args.quick else [1200, 2400, 4800, 10_000]
+    sc = CHAScenario(l_star=args.l_star)
+    report(f"neighbour list, l* = {sc.l_star} (A0 = {sc.A0}, a = {sc.a}, rho = {sc.rho})",
+           [measure(sc, N, "neighbours", args.source) for N in Ns])
+    dense = CHAScenario(l_star=0.5)
+    report("all pairs, l* = 0.5",
+           [measure(dense, N, "dense", args.source) for N in ([1000] if args.quick
+                                                              else [1000, 1200, 1400])])
+
+
+if __name__ == "__main__":
+    main()

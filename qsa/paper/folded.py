@@ -1,0 +1,276 @@
+"""Folded equilibria of the CHA flow (f:fold): polish, spectrum, stability, relaxation rate.
+
+:func:`folded_equilibrium` takes the final nodes of a CHA flow (a :class:`CHARun`
+of :func:`qsa.paper.run_cha` / :func:`qsa.paper.run_folding`, or any nodes and
+their CHA parameters), polishes them by Newton's method on the flow's own
+Fourier grid (``Fourier(N)``, ``N`` made odd; the energy
+``CanhamHelfrich(eps) + Perimeter(beta, rho L0) + Adhesion(A0, l*, a)``),
+computes the spectrum of the linearization ``J`` (normal gauge) with its kernel
+(the rigid motions) recognised, counts the unstable modes outside the kernel, and
+checks the spectrum against the DAE: the CHA flow started from the polished state
+displaced along its slowest decaying mode relaxes at a rate measured from the
+projection of ``V^n`` on that mode's eigenspace, to compare with the eigenvalue.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from qsa import Curve, Fourier
+from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
+from qsa.equilibria import polish
+from qsa.flows import CHA, solve_flow
+from qsa.spectra import spectrum
+from qsa.spectra.kernel import rigid_normal_basis
+
+if TYPE_CHECKING:
+    from qsa.energies.base import Energy
+    from qsa.equilibria.newton import PolishResult
+    from qsa.spectra.result import Spectrum
+
+__all__ = ["FoldedEquilibrium", "folded_energy", "folded_equilibrium", "folded_equilibria",
+           "relaxation_rate"]
+
+
+def folded_energy(eps, beta, L_star, A0, l_star, a):
+    """``CanhamHelfrich(eps) + Perimeter(beta, L_star) + Adhesion(A0, l_star, a)``."""
+    return CanhamHelfrich(eps) + Perimeter(beta, L_star) + Adhesion(A0, l_star, a)
+
+
+@dataclass
+class FoldedEquilibrium:
+    """A polished folded CHA state with its spectrum, stability and flow-rate check.
+
+    Attributes
+    ----------
+    name : str
+    params : dict
+        ``eps, beta, rho, L0, L_star, A0, l_star, a`` (``L_star = rho L0``).
+    N : int
+        Nodes of the polished state (odd: the flow's ``N`` rounded up).
+    energy : Energy
+    guess : Curve
+        The flow's final state on ``Fourier(N)``.
+    polished : PolishResult
+    spectrum : Spectrum or None
+        ``None`` when the polish failed.
+    n_slow : int
+        Number of slowest non-kernel eigenvalues reported.
+    rate : dict or None
+        :func:`relaxation_rate` (without its ``"_flow"`` entry), ``None`` when not run.
+    flow : tuple or None
+        ``(FlowResult, times, projected amplitude)`` of the rate check.
+    """
+
+    name: str
+    params: dict
+    N: int
+    energy: Energy
+    guess: Curve
+    polished: PolishResult
+    spectrum: Spectrum | None = None
+    n_slow: int = 6
+    rate: dict | None = None
+    flow: tuple | None = field(default=None, repr=False)
+
+    @property
+    def curve(self):
+        """The polished curve (the last iterate when the polish failed)."""
+        return self.polished.curve
+
+    @property
+    def relative_residual(self) -> float:
+        """Last relative residual of the Newton polish."""
+        h = self.polished.history
+        return float(h[-1]) if len(h) else float("inf")
+
+    @property
+    def slowest(self) -> np.ndarray:
+        """Indices (into the spectrum) of the ``n_slow`` non-kernel eigenvalues nearest 0.
+
+        Empty without a spectrum (the polish failed).
+        """
+        sp = self.spectrum
+        if sp is None:
+            return np.zeros(0, dtype=int)
+        idx = np.flatnonzero(~sp.is_kernel)
+        return idx[np.argsort(np.abs(sp.eigenvalues[idx]))][: self.n_slow]
+
+    @property
+    def n_unstable(self) -> int | None:
+        """Positive eigenvalues of ``J`` outside the kernel (``None`` without a spectrum)."""
+        return None if self.spectrum is None else int(self.spectrum.n_unstable)
+
+    @property
+    def stable(self) -> bool | None:
+        """No unstable mode besides the kernel."""
+        return None if self.spectrum is None else self.n_unstable == 0
+
+    @property
+    def success(self) -> bool:
+        """Polished, spectrum computed and (if run) the rate within 1% of the eigenvalue."""
+        ok = bool(self.polished.success) and self.spectrum is not None
+        if self.rate is not None:
+            ok = ok and self.rate["success"] and self.rate["relative_error"] <= 0.01
+        return ok
+
+    def summary(self) -> dict:
+        """JSON-able summary."""
+        out = {"name": self.name, "N": self.N, "params": dict(self.params),
+               "polish_success": bool(self.polished.success),
+               "relative_residual": self.relative_residual,
+               "residual": float(self.polished.residual),
+               "closure": float(self.polished.closure),
+               "n_newton": int(self.polished.n_newton),
+               "length": float(self.curve.length()),
+               "energy": float(self.energy.energy(self.curve)),
+               "success": self.success}
+        sp = self.spectrum
+        if sp is not None:
+            lam = sp.eigenvalues
+            out.update(n_unstable=self.n_unstable, stable=self.stable,
+                       n_kernel=int(sp.n_kernel), kernel_tol=float(sp.kernel_tol),
+                       kernel_eigenvalues=[float(v) for v in lam[sp.is_kernel]],
+                       slowest_eigenvalues=[float(lam[i]) for i in self.slowest],
+                       unstable_eigenvalues=[float(v) for v in lam[sp._unstable_mask()]],
+                       spectrum_message=sp.message)
+        if self.rate is not None:
+            out["rate"] = dict(self.rate)
+        return out
+
+
+def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=2.0, tol=1e-7,
+                    snapshots=12, max_time=None):
+    """Perturb a polished folded state along an eigenmode; fit the CHA flow's decay rate.
+
+    The nodes are displaced normally by ``amplitude`` (max norm) times the eigenvector
+    ``phi`` (normal gauge); the CHA DAE (finite differences, BDF2, same ``N``) runs for ``efolds``
+    e-folding times (at most ``max_time``), with ``rho`` rescaled so that its length
+    target ``rho L0`` is the equilibrium's ``L_star`` (the flow binds ``L0`` to its
+    initial length). ``V^n`` at the snapshots is projected (least squares) onto the
+    eigenspace of the eigenvalue (eigenvectors within ``1e-6`` relative); the rate is
+    the slope of the log of the projection's norm over the snapshots after the third.
+
+    Parameters
+    ----------
+    fe : FoldedEquilibrium
+        With a spectrum.
+    mode : int, optional
+        Index into the spectrum; default the slowest decaying non-kernel mode.
+
+    Returns
+    -------
+    dict
+        ``mode, eigenvalue, multiplicity, measured_rate, relative_error, t_final,
+        success, n_steps``, and ``"_flow"`` = (FlowResult, times, projected amplitude).
+    """
+
+    sp = fe.spectrum
+    if sp is None:
+        raise ValueError("fe: no spectrum (the polish failed); polish before the rate check")
+    lam = sp.eigenvalues
+    if mode is None:
+        decaying = np.flatnonzero((lam < 0) & ~sp.is_kernel)
+        if decaying.size == 0:
+            raise ValueError("fe: no decaying mode outside the kernel")
+        i = int(decaying[np.argmax(lam[decaying])])
+    else:
+        i = int(mode)
+    lam1, phi = float(lam[i]), sp.eigenvectors[:, i]
+    if not lam1 < 0:
+        raise ValueError(f"mode: eigenvalue {lam1:.3g} of mode {i} is >= 0, it does not decay")
+    c = fe.curve
+    x, y = c.positions()
+    nx, ny = c.normal()
+    d = amplitude / np.abs(phi).max()
+    x1, y1 = x + d * phi * nx, y + d * phi * ny
+    L1 = float(np.sum(np.hypot(np.roll(x1, -1) - x1, np.roll(y1, -1) - y1)))
+    p = fe.params
+    model = CHA(eps=p["eps"], beta=p["beta"], rho=p["L_star"] / L1, A0=p["A0"],
+                l_star=p["l_star"], a=p["a"])
+    T = efolds / abs(lam1)
+    if max_time is not None:
+        T = min(T, float(max_time))
+    res = solve_flow(model, (x1, y1), T, N=fe.N, tol=tol, method="bdf2",
+                     t_eval=np.linspace(0, T, snapshots), progress=False)
+    Vn = np.array([res.system.normal_velocity(s) for s in res.states])
+    same = np.flatnonzero((np.abs(lam - lam1) <= 1e-6 * abs(lam1)) & ~sp.is_kernel)
+    # the rigid motions' normal velocities join the basis: the finite-difference DAE
+    # drifts rigidly at the order of its discretization, which is no decay
+    rigid = rigid_normal_basis(fe.curve).T
+    basis = np.column_stack([sp.eigenvectors[:, same], rigid])
+    coef = np.linalg.lstsq(basis, Vn.T, rcond=None)[0][: same.size]
+    projected = np.linalg.norm(sp.eigenvectors[:, same] @ coef, axis=0) / np.sqrt(fe.N)
+    fit = slice(3, None)
+    rate = float(np.polyfit(res.t[fit], np.log(projected[fit]), 1)[0])
+    return {"mode": i, "eigenvalue": lam1, "multiplicity": int(same.size),
+            "measured_rate": rate, "relative_error": abs(rate - lam1) / abs(lam1),
+            "t_final": float(T), "amplitude": float(amplitude),
+            "success": bool(res.success), "n_steps": int(res.n_steps),
+            "_flow": (res, np.asarray(res.t), projected)}
+
+
+def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded", tol=1e-10,
+                       maxiter=40, n_slow=6, rate_check=True, rate_options=None):
+    """Polish the final state of a CHA flow; spectrum, stability and relaxation rate.
+
+    Parameters
+    ----------
+    x, y : array_like, shape (N,)
+        Final nodes of the flow (counter-clockwise).
+    eps, beta, rho, A0, l_star, a : float
+        The CHA parameters (:class:`qsa.flows.CHA`).
+    L0 : float
+        The flow's reference (initial) length: the perimeter target is ``rho L0``.
+    tol, maxiter : float, int
+        Newton target (relative residual) and step limit (:func:`qsa.equilibria.polish`).
+    n_slow : int
+        Number of slowest modes reported.
+    rate_check : bool
+        Run :func:`relaxation_rate` on the slowest decaying mode.
+    rate_options : dict, optional
+        Keywords of :func:`relaxation_rate`.
+
+    Returns
+    -------
+    FoldedEquilibrium
+        A failed polish gives ``success=False``, the last iterate and no spectrum.
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if x.shape != y.shape or x.ndim != 1:
+        raise ValueError(f"x, y: need two 1-D arrays of the same length, got shapes "
+                         f"{x.shape} and {y.shape}")
+    N = x.size
+    L_star = float(rho) * float(L0)
+    params = {"eps": float(eps), "beta": float(beta), "rho": float(rho), "L0": float(L0),
+              "L_star": L_star, "A0": float(A0), "l_star": float(l_star), "a": float(a)}
+    E = folded_energy(eps, beta, L_star, A0, l_star, a)
+    # Fourier: on finite differences the rigid-motion identities of a two-point V^n hold
+    # only to the grid's order, so no exact equilibrium (nor kernel) exists there
+    N = N + 1 - N % 2
+    guess = Curve.from_positions(x, y, Fourier(N))
+    pr = polish(E, guess, tol=tol, maxiter=maxiter)
+    fe = FoldedEquilibrium(name=name, params=params, N=N, energy=E, guess=guess, polished=pr,
+                           n_slow=int(n_slow))
+    if not pr.success:
+        return fe
+    fe.spectrum = spectrum(E, pr.curve)
+    if rate_check:
+        rate = relaxation_rate(fe, **(rate_options or {}))
+        fe.flow = rate.pop("_flow")
+        fe.rate = rate
+    return fe
+
+
+def folded_equilibria(runs, **options):
+    """:func:`folded_equilibrium` of the final state of each :class:`CHARun` in ``runs``."""
+    out = []
+    for r in runs:
+        sc = r.scenario
+        out.append(folded_equilibrium(r.snap_x[-1], r.snap_y[-1], eps=sc.eps, beta=sc.beta,
+                                      rho=sc.rho, L0=r.L0, A0=sc.A0, l_star=sc.l_star, a=sc.a,
+                                      name=r.name, **options))
+    return out

@@ -1,0 +1,99 @@
+"""Folded-state analysis (qsa.paper.folded): polish, spectrum with its kernel, DAE rate.
+
+The state is the reference CHA equilibrium (appendix parameters, l* = 0.5) sampled at
+160 nodes, as a flow's final nodes would be.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from qsa import Curve, Fourier
+from qsa.paper.folded import folded_equilibrium
+
+REF = json.loads((Path(__file__).parents[1] / "reference"
+                  / "cha_trillium_equilibrium.json").read_text())
+
+RHO = 1.5
+
+
+def nodes(N=160, noise=0.0):
+    c = Curve(REF["kappa"], REF["L"], Fourier(REF["N"]), REF["theta0"], tuple(REF["origin"]))
+    x, y = c.on_grid(Fourier(N + 1)).positions()
+    x, y = x[:N], y[:N]          # N nodes, not quite at equal spacing: a flow's last state
+    if noise:
+        nx, ny = c.on_grid(Fourier(N + 1)).normal()
+        bump = noise * np.cos(5 * np.arange(N) * 2 * np.pi / N)
+        x, y = x + bump * nx[:N], y + bump * ny[:N]
+    return x, y
+
+
+def analyse(x, y, **options):
+    return folded_equilibrium(x, y, eps=REF["eps"], beta=REF["beta"], rho=RHO,
+                              L0=REF["L_star"] / RHO, A0=REF["A0"], l_star=REF["l_star"],
+                              a=REF["a"], **options)
+
+
+@pytest.fixture(scope="module")
+def fe():
+    return analyse(*nodes(noise=2e-3))
+
+
+def test_polish_spectrum_and_flow_rate(fe):
+    assert fe.polished.success and fe.relative_residual <= 1e-9
+    assert fe.N == 161
+    sp = fe.spectrum
+    assert sp.n_kernel == 3                       # the rigid motions, recognised
+    assert np.all(np.abs(sp.eigenvalues[sp.is_kernel]) <= sp.kernel_tol)
+    assert fe.n_unstable == int(np.sum(sp.eigenvalues[~sp.is_kernel] > 0))
+    assert not np.any(sp.is_kernel[fe.slowest])
+    # the DAE decays along the slowest decaying mode at its eigenvalue, within 1%
+    assert fe.rate["success"]
+    assert fe.rate["eigenvalue"] == max(v for v in sp.eigenvalues[~sp.is_kernel] if v < 0)
+    assert fe.rate["relative_error"] <= 0.01
+    s = json.loads(json.dumps(fe.summary()))
+    assert s["n_kernel"] == 3 and s["rate"]["relative_error"] <= 0.01
+    assert s["params"]["L_star"] == pytest.approx(REF["L_star"], rel=1e-14)
+
+
+def test_slowest_modes_figure(fe):
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    from qsa.plotting.simulations import folded_modes_figure
+
+    fig = folded_modes_figure([fe], n_modes=2)
+    lcs = [c for ax in fig.axes for c in ax.collections if isinstance(c, LineCollection)]
+    assert len(lcs) == 2
+    phi = fe.spectrum.eigenvectors[:, fe.slowest[0]]
+    assert np.allclose(lcs[0].get_array(), phi / np.abs(phi).max())
+    plt.close(fig)
+
+
+def test_failed_polish_reported_without_spectrum():
+    fe = analyse(*nodes(noise=2e-3), maxiter=1, rate_check=False)
+    assert not fe.polished.success and fe.spectrum is None and not fe.success
+    s = json.loads(json.dumps(fe.summary()))
+    assert s["polish_success"] is False and "n_unstable" not in s
+    assert np.all(np.isfinite(fe.curve.kappa))
+
+
+def test_bad_nodes():
+    with pytest.raises(ValueError, match="x, y"):
+        analyse(np.zeros(10), np.zeros(11))
+
+
+@pytest.mark.slow
+def test_reproduce_folded_table_t1(tmp_path):
+    """The full f:fold reproduction: every final state polished, kernel 3, rate within 1%."""
+    from qsa.cli import main
+
+    assert main(["reproduce", "folded", "--out", str(tmp_path), "--no-progress",
+                 "--no-plots", "--json"]) == 0
+    s = json.loads((tmp_path / "folded.json").read_text())
+    assert not s["failed"] and len(s["equilibria"]) == 3
+    for e in s["equilibria"]:
+        assert e["relative_residual"] <= 1e-9 and e["n_kernel"] == 3
+        assert e["rate"]["relative_error"] <= 0.01
