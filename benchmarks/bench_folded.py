@@ -7,8 +7,9 @@ resampled to each N), or by default the scenario's crenellated start (not an
 equilibrium: the timings are those of the same linear algebra, the spectrum is not
 physical; it needs N >= 1000 on finite differences). Cases: neighbour lists at Table
 T1's l* on finite differences, N = 1200 ... 10^4, and the long-range l* = 0.5 (all
-pairs) at N = 1000 ... 1400. Per N: interacting pairs, wall time of ``spectrum(E, c, k=20, sigma=0)`` (assembly, factorization, Arnoldi)
-and peak traced memory; then the fitted exponent of time against N.
+pairs) at N = 1000 ... 1400. Per N: interacting pairs, wall time of
+``spectrum(E, c, k=20, sigma=0)`` (assembly, factorization, Arnoldi) and peak traced
+memory; then the fitted exponent of time against N.
 
 Timings are wall-clock, single-threaded BLAS, noisy on a shared machine.
 
