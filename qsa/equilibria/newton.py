@@ -11,7 +11,7 @@ negative ``status``, a key of :data:`MESSAGES`) with the best state found.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -328,7 +328,7 @@ def _params(energy, curve, Lambda, constraints=(), mu=()):
 
 
 def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
-           constraints=None) -> PolishResult:
+           constraints=None, globalize=True) -> PolishResult:
     """Polish an approximate equilibrium by Newton's method on ``V^n = 0`` with closure.
 
     Parameters
@@ -354,6 +354,12 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
         equations become ``V^n + sum_i mu_i n_i = 0`` with ``c_i = c_i*`` (``n_L = kappa``,
         ``n_A = 1``), the multipliers ``mu_i`` unknowns of the Newton system
         (:mod:`qsa.equilibria.constraint_terms`).
+    globalize : bool
+        When Newton's method from the guess fails, follow the gradient flow by
+        pseudo-transient continuation (:func:`~qsa.equilibria.transient.pseudo_transient`,
+        at most ``10 maxiter`` implicit flow steps growing into Newton steps) and try
+        Newton again from the states it reaches (default True). The message says
+        how many flow steps it took.
 
     Returns
     -------
@@ -412,8 +418,38 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
     cons = bind_constraints(constraints, curve)
     guess = equal_arclength(curve)
     system = EquilibriumSystem(energy, guess, cons)
-    run = newton_solve(system, system.pack(guess), tol, maxiter, line_search=line_search)
-    return polish_result(energy, system, run, reparameterized=curve is not guess)
+    x0 = system.pack(guess)
+    run = newton_solve(system, x0, tol, maxiter, line_search=line_search)
+    note = ""
+    if not run.success and globalize and maxiter > 0:
+        run, note = _globalized(system, x0, run, tol, maxiter, line_search)
+    res = polish_result(energy, system, run, reparameterized=curve is not guess)
+    if note:
+        res = replace(res, message=res.message + note)
+    return res
+
+
+def _globalized(system, x0, first: NewtonRun, tol, maxiter, line_search):
+    """The pseudo-transient rescue of a failed Newton solve, as one :class:`NewtonRun`."""
+    from qsa.equilibria.transient import pseudo_transient
+
+    tr = pseudo_transient(system, x0, tol=tol, maxiter=10 * maxiter,
+                          newton_maxiter=min(maxiter, 12), line_search=line_search)
+    n_newton = first.n_newton + tr.n_newton
+    n_lu = first.n_lu + tr.n_lu
+    flow = (f"; {tr.n_steps} pseudo-transient flow steps ({tr.n_rejected} rejected, "
+            f"pseudo time {tr.time:.3g}) and {tr.n_attempts} Newton solves after the first "
+            f"failed ({MESSAGES[first.status]})")
+    if tr.success:
+        nr = tr.newton
+        return NewtonRun(nr.x, nr.status, nr.history, n_newton, n_lu, nr.noise_floor), flow
+    if tr.history.size and tr.history.min() < first.history.min():
+        scale = residual_scale(system.energy, system.curve(tr.x))
+        floor = float(np.max(_noise_floor(system, tr.x, scale)))
+        return NewtonRun(tr.x, first.status, np.append(first.history, tr.history.min()),
+                         n_newton, n_lu, floor), flow
+    return NewtonRun(first.x, first.status, first.history, n_newton, n_lu,
+                     first.noise_floor), flow
 
 
 def polish_result(energy, system, run: NewtonRun, reparameterized=False) -> PolishResult:
