@@ -34,7 +34,7 @@ dtype (float64, complex128 eigenvalues, bool masks).
         "kstar"}, {"energy": "Perimeter", "beta", "L_star"}]}``; ``params``
         (construction parameters: ``L``, ``L_star``, ``alpha``, ``facets``, ...);
         ``residual``, ``closure``, ``residual_scale``, ``kind`` (``"npulse"``,
-        ``"splice"``, ``"circle"``, ``"polished"``), ``success``, ``message``.
+        ``"splice"``, ``"circle"``, ``"polished"``, ``"cha"``), ``success``, ``message``.
 
 ``qsa.spectrum`` -- :func:`save_spectrum`, ``qsa spectrum ... --save FILE``
     arrays

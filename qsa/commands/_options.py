@@ -6,7 +6,7 @@
 * Option types (:func:`positive_float`, :func:`positive_int`, ...): a bad value is
   refused by argparse with the option's name (exit code 2).
 * :func:`check_paths` -- run by :func:`qsa.cli.main` before a subcommand starts:
-  input files (``--init``, ``--resume FILE``) must exist, output folders (``--out``)
+  input files (``--init``, ``--resume FILE``, ``--from``) must exist, output folders (``--out``)
   and files (``--plot``, ``--save``, ``--checkpoint``) must be writable, so that a
   long run is not lost at its end to a typo in an output path.
 
@@ -41,7 +41,7 @@ FIGURE_FORMATS = ("png", "pdf", "svg", "svgz", "eps", "ps", "jpg", "jpeg", "tif"
 #: Options naming an output folder, an output file, an input file (by ``dest``).
 OUTPUT_FOLDERS = ("out",)
 OUTPUT_FILES = ("plot", "save", "checkpoint", "movie")
-INPUT_FILES = ("init", "resume")
+INPUT_FILES = ("init", "resume", "from")
 
 # -1, -.5, -1e-4, -2.5E+3, -inf, -nan: arguments, not options (argparse's own pattern
 # misses the exponent form)

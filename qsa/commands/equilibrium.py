@@ -1,4 +1,5 @@
-"""``qsa equilibrium npulse|splice|circle``: build a faceted equilibrium and report it.
+"""``qsa equilibrium npulse|splice|circle|cha``: build a faceted equilibrium, or read a
+folded CHA state, and report it.
 
 Examples
 --------
@@ -7,6 +8,9 @@ Examples
 ``qsa equilibrium circle --radius 0.7 --alpha 0.1``
 ``qsa equilibrium npulse --pulses 3 --alpha 0.1 --polish --save eq.npz``  (then
 ``qsa spectrum``, ``qsa flow facet --init eq.npz`` or ``qsa.io.load("eq.npz")``)
+``qsa equilibrium cha --from run-cha/result.npz --polish --save cha.npz``  (the final state
+of ``qsa flow cha --out run-cha`` polished; then ``qsa spectrum cha --from cha.npz``)
+``qsa equilibrium cha --from qsa-folding/cha_rho1.3.npz --polish --rho 1.35 --json``
 
 A splice keeps the corner angles and changes the facet lengths by the least
 amount that closes the curve; when they change, a warning gives both lists.
@@ -18,7 +22,7 @@ import json
 
 import numpy as np
 
-from qsa.commands._errors import warn
+from qsa.commands._errors import note, warn
 from qsa.commands._options import finite_float, int_at_least, positive_float
 
 
@@ -31,18 +35,22 @@ def _grid(args):
 
 
 def add_parser(sub):
-    p = sub.add_parser("equilibrium", help="faceted equilibria: N-pulses, splices, circles",
+    p = sub.add_parser("equilibrium", help="faceted equilibria: N-pulses, splices, circles; "
+                                           "folded CHA states",
                        description=__doc__.split("\n\n")[0])
     add_kinds(p, run, save="write the equilibrium to FILE (.npz; read it back with "
-                           "qsa.io.load, start a flow from it with qsa flow ... --init FILE)")
+                           "qsa.io.load, start a flow from it with qsa flow ... --init FILE)",
+              cha=run_cha)
     return p
 
 
-def add_kinds(p, func, extra=None, save=None):
+def add_kinds(p, func, extra=None, save=None, cha=None):
     """Add the ``npulse|splice|circle`` sub-parsers (with the shared options) to ``p``.
 
     ``extra(q)``, if given, adds more options to each of them (``qsa spectrum`` uses it);
-    ``save``, if given, is the help of a ``--save FILE`` option.
+    ``save``, if given, is the help of a ``--save FILE`` option; ``cha``, if given, is
+    the ``run`` of a ``cha`` kind (a folded CHA state read from a file, with options of
+    its own: :mod:`qsa.commands._folded`), which gets ``extra`` and ``save`` too.
     """
     kinds = p.add_subparsers(dest="kind", metavar="KIND", required=True)
 
@@ -86,6 +94,10 @@ def add_kinds(p, func, extra=None, save=None):
     q = kinds.add_parser("circle", help="the circle as an equilibrium (L* balanced)")
     q.add_argument("--radius", type=positive_float, required=True, help="circle radius")
     common(q)
+    if cha is not None:
+        from qsa.commands._folded import add_cha_kind
+
+        add_cha_kind(kinds, cha, extra=extra, save=save)
     return kinds
 
 
@@ -173,3 +185,34 @@ def run(args):
         if getattr(args, "save", None):
             print(f"  equilibrium written to {args.save}")
     return 0 if eq.success else 1
+
+
+def run_cha(args):
+    """``qsa equilibrium cha``: the CHA state of ``--from``, polished with ``--polish``."""
+    from qsa.commands import _folded
+
+    fe, state = _folded.build(args)
+    summary = _folded.summary(fe, state, args)
+    if args.save:
+        from qsa.io import save_equilibrium
+
+        summary["file"] = save_equilibrium(args.save, _folded.equilibrium_of(fe, args.polish))
+    if args.plot:
+        from qsa import plotting
+
+        p = fe.params
+        title = (f"{fe.name}: rho={p['rho']:g}, A0={p['A0']:g}, l*={p['l_star']:g}, "
+                 f"E={summary['energy']:.6g}")
+        plotting.save(plotting.plot_curve_and_curvature(fe.curve, title=title), args.plot)
+        summary["plot"] = args.plot
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print("\n".join(_folded.text_lines(summary)))
+        if args.plot:
+            print(f"  figure written to {args.plot}")
+        if args.save:
+            print(f"  equilibrium written to {args.save}")
+    if not summary["success"]:
+        note(args, f"the polish failed: {fe.polished.message}")
+    return 0 if summary["success"] else 1

@@ -1,7 +1,9 @@
-"""``qsa spectrum npulse|splice|circle``: spectrum of the linearized flow at an equilibrium.
+"""``qsa spectrum npulse|splice|circle|cha``: spectrum of the linearized flow at an equilibrium.
 
 Builds the equilibrium exactly as ``qsa equilibrium`` does (same options), then calls
-:func:`qsa.spectra.spectrum` and :func:`qsa.spectra.kernel_report`.
+:func:`qsa.spectra.spectrum` and :func:`qsa.spectra.kernel_report`. For ``cha`` (a
+folded CHA state from ``--from FILE``) it reports the kernel, the unstable count and
+the slowest eigenvalues outside the kernel, with their error estimates.
 
 Examples
 --------
@@ -9,6 +11,9 @@ Examples
 ``qsa spectrum circle --radius 0.7 --alpha 0.1 --N 33 --gauge comoving --plot c.png``
 ``qsa spectrum npulse --pulses 3 --alpha 0.15 --fd --N 2000 --polish --k 10 --sigma 0``
 ``qsa spectrum npulse --pulses 3 --alpha 0.2 --save sp.npz``  (``qsa.io.load("sp.npz")``)
+``qsa spectrum cha --from cha.npz --plot modes.png``  (``qsa equilibrium cha ... --save
+cha.npz``; the figure: the slowest modes on the curve)
+``qsa spectrum cha --from run-cha/result.npz --polish --show 4 --json``
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ import warnings
 import numpy as np
 
 from qsa.commands import equilibrium
+from qsa.commands._errors import note
 from qsa.commands._options import finite_float, int_at_least
 
 
@@ -47,13 +53,25 @@ def add_parser(sub):
     equilibrium.add_kinds(p, run, extra=_extra,
                           save="write the spectrum and its equilibrium to FILE (.npz; read it "
                                "back with qsa.io.load, the equilibrium with "
-                               "qsa.io.load_equilibrium; qsa flow ... --init FILE starts from it)")
+                               "qsa.io.load_equilibrium; qsa flow ... --init FILE starts from it)",
+                          cha=run_cha)
     return p
+
+
+def _spectrum(args, energy, curve):
+    """``(Spectrum, caught warnings)`` of the command line's options at ``curve``."""
+    from qsa.spectra import NotEquilibriumWarning, UnresolvedEigenvalueWarning, spectrum
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", NotEquilibriumWarning)
+        warnings.simplefilter("always", UnresolvedEigenvalueWarning)
+        spec = spectrum(energy, curve, k=args.k, sigma=args.sigma, gauge=args.gauge,
+                        reject_spurious=False if args.no_reject else None)
+    return spec, caught
 
 
 def run(args):
     from qsa.commands._memory import require, spectrum_bytes
-    from qsa.spectra import NotEquilibriumWarning, UnresolvedEigenvalueWarning, spectrum
 
     eq = equilibrium.build_polished(args)
     N = eq.curve.N
@@ -61,11 +79,7 @@ def run(args):
             spectrum_bytes(N, fourier=not eq.curve.grid.sparse, k=args.k,
                            reject=not args.no_reject),
             "use a smaller --N, or --k K (the K eigenvalues nearest --sigma)")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", NotEquilibriumWarning)
-        warnings.simplefilter("always", UnresolvedEigenvalueWarning)
-        spec = spectrum(eq.energy, eq.curve, k=args.k, sigma=args.sigma, gauge=args.gauge,
-                        reject_spurious=False if args.no_reject else None)
+    spec, caught = _spectrum(args, eq.energy, eq.curve)
     summary = {"equilibrium": eq.summary(), "spectrum": spec.summary(args.show)}
     summary["warnings"] = [str(w.message) for w in caught]
     if args.save:
@@ -108,3 +122,63 @@ def run(args):
         if args.save:
             print(f"  spectrum written to {args.save}")
     return 0 if spec.success else 1
+
+
+def run_cha(args):
+    """``qsa spectrum cha``: the spectrum at the CHA state of ``--from`` (``--polish``ed)."""
+    from qsa.commands import _folded
+
+    fe, state = _folded.build(args, spectrum=True)
+    if args.polish and not fe.polished.success:
+        summary = _folded.summary(fe, state, args)
+        if args.json:
+            print(json.dumps(summary, indent=2))
+        else:
+            print("\n".join(_folded.text_lines(summary)))
+            print("  no spectrum: the polish failed")
+        note(args, f"the polish failed, no spectrum: {fe.polished.message}")
+        return 1
+    fe.spectrum, caught = _spectrum(args, fe.energy, fe.curve)
+    sp = fe.spectrum
+    summary = _folded.summary(fe, state, args)
+    summary["slowest_errors"] = [float(sp.errors[i]) for i in fe.slowest]
+    summary["spectrum"] = sp.summary(args.show)
+    summary["warnings"] = [str(w.message) for w in caught]
+    summary["success"] = bool(summary["success"] and sp.success)
+    if args.save:
+        from qsa.io import save_spectrum
+
+        summary["file"] = save_spectrum(args.save, sp, _folded.equilibrium_of(fe, args.polish))
+    if args.plot:
+        from qsa import plotting
+
+        if args.mode is not None:
+            fig = plotting.plot_eigenmode(sp, fe.curve, args.mode)
+        elif args.gauge == "normal":
+            from qsa.plotting.simulations import folded_modes_figure
+
+            fig = folded_modes_figure([fe], n_modes=min(2, max(len(fe.slowest), 1)))
+        else:
+            fig = plotting.plot_spectrum(sp).figure
+        plotting.save(fig, args.plot)
+        summary["plot"] = args.plot
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0 if summary["success"] else 1
+    for w in caught:
+        print(f"warning: {w.message}")
+    print("\n".join(_folded.text_lines(summary)))
+    print(sp.message)
+    print(f"  kernel {summary['n_kernel']} (|lambda| <= {summary['kernel_tol']:.2e}), "
+          f"unstable {summary['n_unstable']}: "
+          f"{'stable' if summary['stable'] else 'unstable'}")
+    print(f"  slowest outside the kernel:\n  {'i':>4} {'lambda':>22} {'error':>9}")
+    for i in fe.slowest:
+        lam = sp.eigenvalues[i]
+        lam_s = f"{lam:.12g}" if np.isrealobj(lam) else f"{lam.real:.8g}{lam.imag:+.3g}i"
+        print(f"  {i:>4} {lam_s:>22} {sp.errors[i]:9.1e}")
+    if args.plot:
+        print(f"  figure written to {args.plot}")
+    if args.save:
+        print(f"  spectrum written to {args.save}")
+    return 0 if summary["success"] else 1

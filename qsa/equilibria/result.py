@@ -40,7 +40,8 @@ class Equilibrium:
         The largest single term of ``V^n`` (``max |G mu|`` and ``max |kappa g d_g E|``),
         so ``residual / residual_scale`` is the relative residual.
     kind : str
-        ``"npulse"``, ``"circle"``, ``"splice"``, ``"polished"``.
+        ``"npulse"``, ``"circle"``, ``"splice"``, ``"polished"``, ``"cha"`` (a CHA
+        state as read, saved by ``qsa equilibrium cha`` without ``--polish``).
     success : bool
         Whether the construction met its tolerances.
     message : str

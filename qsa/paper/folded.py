@@ -214,48 +214,62 @@ def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=2.0
 
 
 def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded", tol=1e-10,
-                       maxiter=40, n_slow=6, rate_check=True, rate_options=None):
+                       maxiter=40, n_slow=6, rate_check=True, rate_options=None,
+                       with_spectrum=True):
     """Polish the final state of a CHA flow; spectrum, stability and relaxation rate.
 
     Parameters
     ----------
     x, y : array_like, shape (N,)
-        Final nodes of the flow (counter-clockwise).
+        Final nodes of the flow (counter-clockwise). Or ``x`` a :class:`~qsa.Curve`
+        on a Fourier grid and ``y`` None: the guess itself, taken as it is (e.g. a
+        saved equilibrium, which resampling its nodes would perturb).
     eps, beta, rho, A0, l_star, a : float
         The CHA parameters (:class:`qsa.flows.CHA`).
     L0 : float
         The flow's reference (initial) length: the perimeter target is ``rho L0``.
     tol, maxiter : float, int
-        Newton target (relative residual) and step limit (:func:`qsa.equilibria.polish`).
+        Newton target (relative residual) and step limit (:func:`qsa.equilibria.polish`);
+        ``maxiter=0`` evaluates the state as given (on ``Fourier(N)``, at equal arc
+        length), with ``success`` whether it is an equilibrium to ``tol`` already.
     n_slow : int
         Number of slowest modes reported.
     rate_check : bool
         Run :func:`relaxation_rate` on the slowest decaying mode.
     rate_options : dict, optional
         Keywords of :func:`relaxation_rate`.
+    with_spectrum : bool
+        Compute the spectrum (and run the rate check) after a successful polish; False:
+        the polish only (``spectrum`` stays ``None``, and so ``success`` False).
 
     Returns
     -------
     FoldedEquilibrium
         A failed polish gives ``success=False``, the last iterate and no spectrum.
     """
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if x.shape != y.shape or x.ndim != 1:
-        raise ValueError(f"x, y: need two 1-D arrays of the same length, got shapes "
-                         f"{x.shape} and {y.shape}")
-    N = x.size
+    if isinstance(x, Curve) and y is None:
+        if not isinstance(x.grid, Fourier):
+            raise ValueError(f"x: a Curve guess must be on a Fourier grid, got {x.grid!r}; "
+                             "resample it with x.on_grid(Fourier(N))")
+        guess = x
+    else:
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        if x.shape != y.shape or x.ndim != 1:
+            raise ValueError(f"x, y: need two 1-D arrays of the same length, got shapes "
+                             f"{x.shape} and {y.shape}")
+        # Fourier: on finite differences the rigid-motion identities of a two-point V^n
+        # hold only to the grid's order, so no exact equilibrium (nor kernel) exists there
+        N = x.size + 1 - x.size % 2
+        guess = Curve.from_positions(x, y, Fourier(N))
+    N = guess.N
     L_star = float(rho) * float(L0)
     params = {"eps": float(eps), "beta": float(beta), "rho": float(rho), "L0": float(L0),
               "L_star": L_star, "A0": float(A0), "l_star": float(l_star), "a": float(a)}
     E = folded_energy(eps, beta, L_star, A0, l_star, a)
-    # Fourier: on finite differences the rigid-motion identities of a two-point V^n hold
-    # only to the grid's order, so no exact equilibrium (nor kernel) exists there
-    N = N + 1 - N % 2
-    guess = Curve.from_positions(x, y, Fourier(N))
     pr = polish(E, guess, tol=tol, maxiter=maxiter)
     fe = FoldedEquilibrium(name=name, params=params, N=N, energy=E, guess=guess, polished=pr,
                            n_slow=int(n_slow))
-    if not pr.success:
+    if not (pr.success and with_spectrum):
         return fe
     fe.spectrum = spectrum(E, pr.curve)
     if rate_check:
