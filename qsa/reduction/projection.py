@@ -182,15 +182,18 @@ def nearest_splice(ode, kappa, positions, L=None, cutoff=None, tol=1e-6, max_ite
 
     Examples
     --------
+    A splice is its own projection (from positions off it, with no common shift, which
+    only moves the base point):
+
     >>> import numpy as np
     >>> from qsa.equilibria import splice_polygon
     >>> from qsa.reduction import FrontODE
-    >>> eq = splice_polygon(np.radians([130, 120, 110]), [0.3, 0.4, 0.5], 0.1, kstar=5.0)
-    >>> ode = FrontODE(0.1, 5.0, eq.params["L"], backend="numpy")
-    >>> p = np.array(eq.params["positions"])
-    >>> kappa = ode.fields(p).psi
-    >>> d = 0.01 * np.sin(np.arange(6))
-    >>> r = nearest_splice(ode, kappa, p + d - d.mean())  # a common shift moves the base point
+    >>> quad = splice_polygon(np.radians([95, 85, 95, 85]), [0.5, 0.6, 0.5, 0.6], 0.1,
+    ...                       kstar=5.0)
+    >>> p, L = np.array(quad.params["positions"]), quad.params["L"]
+    >>> ode = FrontODE(0.1, 5.0, L, backend="numpy")
+    >>> off = p + 0.01 * np.array([1, -1, 0, 1, -1, 0, 1, -1])
+    >>> r = nearest_splice(ode, ode.fields(p).psi, off)
     >>> bool(np.max(np.abs(r.positions - p)) < 1e-8), bool(r.distance < 1e-10)
     (True, True)
     """
