@@ -137,8 +137,8 @@ def read_state(path) -> CHAState:
     if isinstance(result, PaperRunFile):
         p = result.summary.get("params", {})
         if not all(k in p for k in CHA_PARAMS) or "L0" not in result.summary:
-            raise _not_cha(path, f"the qsa reproduce run {result.name!r}, which is no CHA "
-                                 "run")
+            raise _not_cha(path, f"the qsa reproduce run {result.name!r} (its summary has "
+                                 "no CHA parameters and L0)")
         params = {k: float(p[k]) for k in CHA_PARAMS}
         params["L0"] = float(result.summary["L0"])
         return CHAState(result.x, result.y, params, result.name,

@@ -17,8 +17,10 @@ from qsa.equilibria import Equilibrium, circle
 from qsa.io import load, load_equilibrium, save_equilibrium
 from qsa.paper._files import write_output
 from qsa.paper.folded import folded_energy, folded_equilibrium
-from tests.paper.test_folded import REF, RHO, nodes
+from tests.helpers import CHA_REF as REF
+from tests.helpers import folded_nodes as nodes
 
+RHO = 1.5
 PARAMS = {"eps": REF["eps"], "beta": REF["beta"], "rho": RHO, "A0": REF["A0"],
           "l_star": REF["l_star"], "a": REF["a"]}
 L0 = REF["L_star"] / RHO
@@ -203,6 +205,20 @@ def test_not_a_cha_state(files, capsys):
     code, _, err = run(capsys, "equilibrium", "cha", "--from", files["dir"] / "nodes.txt")
     assert code == 2
     one_error_line(err, "--from", "no qsa .npz", "not a CHA state")
+    x, y = files["nodes"]
+    write_output(str(files["dir"]), "facet", {"snap_t": np.array([0.0]), "snap_x": x[None],
+                                              "snap_y": y[None]},
+                 {"scenario": "facet", "params": {"alpha": 0.1, "kstar": 5.0, "beta": 5.0}})
+    code, _, err = run(capsys, "equilibrium", "cha", "--from", files["dir"] / "facet.npz")
+    assert code == 2
+    one_error_line(err, "--from", "run 'facet'", "no CHA parameters", "not a CHA state")
+    assert main(["flow", "facet", "--N", "40", "--t-final", "1e-7", "--no-progress",
+                 "--no-plots", "--out", str(files["dir"] / "facet-flow")]) == 0
+    capsys.readouterr()
+    code, _, err = run(capsys, "spectrum", "cha", "--from",
+                       files["dir"] / "facet-flow" / "result.npz")
+    assert code == 2
+    one_error_line(err, "--from", "FacetingFlow flow result", "not a CHA state")
 
 
 def test_self_intersecting_states(files, capsys):
