@@ -492,9 +492,9 @@ def polish_result(energy, system, run: NewtonRun, reparameterized=False) -> Poli
     unfolding = a if a.size == 3 else np.concatenate([a, [0.0]])
     if len(run.history) and res > 10 * run.history[-1] * scale:
         msg += (f"; max|V^n| is the unfolding's (|a| = {np.abs(a).max():.1e}): the three "
-                "rigid-motion identities of V^n hold on this grid only to its order "
-                "(two-point energies on finite differences), so V^n = -a.phi is the "
-                "discrete equilibrium")
+                "rigid-motion identities of V^n hold on this grid only to its accuracy "
+                "(two-point energies on finite differences, or a Fourier grid too coarse "
+                "for the state), so V^n = -a.phi is the discrete equilibrium")
     return PolishResult(c, energy, _params(energy, c, Lambda, cons, mu), Lambda, res, clo, scale,
                         kind="polished", success=status >= 0, message=msg, status=status,
                         n_newton=run.n_newton, n_lu=run.n_lu,

@@ -50,7 +50,8 @@ class FoldedEquilibrium:
     params : dict
         ``eps, beta, rho, L0, L_star, A0, l_star, a`` (``L_star = rho L0``).
     N : int
-        Nodes of the polished state (odd: the flow's ``N`` rounded up).
+        Nodes of the polished state (odd: the flow's ``N`` rounded up, then refined
+        while the grid does not resolve the state; see ``refinements``).
     energy : Energy
     guess : Curve
         The flow's final state on ``Fourier(N)``.
@@ -63,6 +64,9 @@ class FoldedEquilibrium:
         :func:`relaxation_rate` (without its ``"_flow"`` entry), ``None`` when not run.
     flow : tuple or None
         ``(FlowResult, times, projected amplitude)`` of the rate check.
+    refinements : list of dict
+        Spectral refinements of the polish (``N, success, relative_V, energy_change,
+        n_newton``; see ``resolve`` of :func:`folded_equilibrium`).
     """
 
     name: str
@@ -75,6 +79,7 @@ class FoldedEquilibrium:
     n_slow: int = 6
     rate: dict | None = None
     flow: tuple | None = field(default=None, repr=False)
+    refinements: list = field(default_factory=list)
 
     @property
     def curve(self):
@@ -123,6 +128,8 @@ class FoldedEquilibrium:
                "polish_success": bool(self.polished.success),
                "relative_residual": self.relative_residual,
                "residual": float(self.polished.residual),
+               "relative_V": float(self.polished.residual / self.polished.residual_scale),
+               "refinements": [dict(r) for r in self.refinements],
                "closure": float(self.polished.closure),
                "n_newton": int(self.polished.n_newton),
                "length": float(self.curve.length()),
@@ -215,7 +222,7 @@ def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=2.0
 
 def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded", tol=1e-10,
                        maxiter=40, n_slow=6, rate_check=True, rate_options=None,
-                       with_spectrum=True):
+                       with_spectrum=True, resolve=1e-9, max_N=4801):
     """Polish the final state of a CHA flow; spectrum, stability and relaxation rate.
 
     Parameters
@@ -241,6 +248,17 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
     with_spectrum : bool
         Compute the spectrum (and run the rate check) after a successful polish; False:
         the polish only (``spectrum`` stays ``None``, and so ``success`` False).
+    resolve : float or None
+        Resolution test of the polished state: on a grid too coarse for the state,
+        the rigid-motion identities of the two-point ``V^n`` hold only to the grid's
+        accuracy, and the equilibrium is ``V^n = -a.phi`` with unfolding parameters
+        ``a != 0`` (:func:`qsa.equilibria.polish`). While ``max|V^n|`` exceeds
+        ``resolve`` of the residual scale, the state is resampled spectrally to
+        ``Fourier(2N - 1)`` and polished again (up to ``max_N`` nodes); the
+        refinements are listed in ``refinements`` with the energy change of each
+        (``None``: no test).
+    max_N : int
+        Largest grid of the refinements.
 
     Returns
     -------
@@ -267,8 +285,21 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
               "L_star": L_star, "A0": float(A0), "l_star": float(l_star), "a": float(a)}
     E = folded_energy(eps, beta, L_star, A0, l_star, a)
     pr = polish(E, guess, tol=tol, maxiter=maxiter)
+    refinements = []
+    while (resolve is not None and maxiter > 0 and pr.success
+           and pr.residual > resolve * pr.residual_scale and 2 * pr.curve.N - 1 <= max_N):
+        fine = polish(E, pr.curve.on_grid(Fourier(2 * pr.curve.N - 1)), tol=tol,
+                      maxiter=maxiter)
+        refinements.append({"N": int(fine.curve.N), "success": bool(fine.success),
+                            "relative_V": float(fine.residual / fine.residual_scale),
+                            "energy_change": float(E.energy(fine.curve) - E.energy(pr.curve)),
+                            "n_newton": int(fine.n_newton)})
+        if not fine.success:
+            break
+        pr = fine
+    N = pr.curve.N
     fe = FoldedEquilibrium(name=name, params=params, N=N, energy=E, guess=guess, polished=pr,
-                           n_slow=int(n_slow))
+                           n_slow=int(n_slow), refinements=refinements)
     if not (pr.success and with_spectrum):
         return fe
     fe.spectrum = spectrum(E, pr.curve)
