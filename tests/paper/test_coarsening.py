@@ -132,7 +132,7 @@ def test_pentagons_with_three_short_facets(seed):
     Measured: the DAE's two events (a facet or a corner first, then a corner) are the
     ODE's first two, the first within 0.1-2%, the second 12-42% early; the ODE then
     collapses a corner of the remaining triangle (t = 4.8-9.1) that the DAE keeps
-    (the post-collision states: the documentation's reduction guide).
+    (the post-collision states: docs/guide/reduction.md, "Multi-event coarsening").
     """
     sc = random_polygon(5, seed, n_short=3, short=(0.25, 0.33))
     eq = sc.splice()
