@@ -1,10 +1,12 @@
 """Shared test utilities: test curves and energies, derivative checks, convergence fits,
 reference runs used by several test modules (no test module imports another)."""
 
+import json
 import math
 import os
 import time
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -291,3 +293,25 @@ def numerical_jacobians(sys, y, ydot, d=1e-6):
         Jy[:, k] = (sys.residual(y + e, ydot) - sys.residual(y - e, ydot)) / (2 * d)
         Jd[:, k] = (sys.residual(y, ydot + e) - sys.residual(y, ydot - e)) / (2 * d)
     return Jy, Jd
+
+
+#: The reference CHA equilibrium (appendix parameters, l* = 0.5) on Fourier(201).
+CHA_REF = json.loads((Path(__file__).parent / "reference"
+                      / "cha_trillium_equilibrium.json").read_text())
+
+
+def folded_nodes(N=160, noise=0.0):
+    """The reference CHA equilibrium at ``N`` nodes, as a flow's last state would be.
+
+    Not quite at equal spacing (``N`` of ``N + 1`` equispaced nodes); ``noise`` adds a
+    normal bump ``noise cos(5 s)``.
+    """
+    ref = CHA_REF
+    c = Curve(ref["kappa"], ref["L"], Fourier(ref["N"]), ref["theta0"], tuple(ref["origin"]))
+    x, y = c.on_grid(Fourier(N + 1)).positions()
+    x, y = x[:N], y[:N]
+    if noise:
+        nx, ny = c.on_grid(Fourier(N + 1)).normal()
+        bump = noise * np.cos(5 * np.arange(N) * 2 * np.pi / N)
+        x, y = x + bump * nx[:N], y + bump * ny[:N]
+    return x, y

@@ -373,7 +373,7 @@ def _without_drift(P, P0, ref):
 
 
 def compare_coarsening(scenario=None, *, N=1200, method="bdf2", tol=1e-6, t_final=None,
-                       handover=None, correction="newton", redistribute="local",
+                       handover=None, correction="newton", redistribute="project",
                        residual_max=0.3, rtol=1e-6, dae=None):
     """Run the DAE and the front ODE through a whole coarsening and compare the events.
 
@@ -392,8 +392,8 @@ def compare_coarsening(scenario=None, *, N=1200, method="bdf2", tol=1e-6, t_fina
     handover : float, optional
         Hand-over time for f:facet (default: automatic, see the module docstring).
     correction : {None, "newton"}
-    redistribute : {"local", "uniform"}
-        :meth:`qsa.reduction.FrontODE.integrate`.
+    redistribute : {"project", "local", "uniform"}
+        The restart after a collision, :meth:`qsa.reduction.FrontODE.integrate`.
     residual_max : float
         Largest ``R_kappa`` of the automatic hand-over.
     rtol : float

@@ -9,7 +9,8 @@ a numpy or compiled evaluation (:mod:`qsa.reduction.backends`) and the integrati
 through collisions (:mod:`qsa.reduction.integrate`). :mod:`qsa.reduction.modes` writes
 the reduced eigenmodes as normal perturbations of the curve and pairs them with the
 full linearization's; :mod:`qsa.reduction.handover` starts the ODE from a curvature
-profile (a DAE state). Its validation against the DAE
+profile (a DAE state); :mod:`qsa.reduction.projection` finds the splice nearest a
+curve in the flow's metric (the ODE's restart after a collision). Its validation against the DAE
 flow and the full linearization (``qsa reproduce fronts``) is :mod:`qsa.paper.fronts`;
 ``SCENARIOS``, ``compare_fronts`` and ``compare_eigenvalues`` stay importable from here
 as aliases.
@@ -37,12 +38,14 @@ from qsa.reduction.integrate import (
 from qsa.reduction.manifold import SpliceFields
 from qsa.reduction.modes import ModePairing, ReducedModes, pair_modes, reduced_modes
 from qsa.reduction.ode import FrontODE
+from qsa.reduction.projection import NearestSplice, nearest_splice, splice_distance
 
 __all__ = ["CoarseningEvent", "Fronts", "FrontTracks", "detect_fronts", "track_flow",
            "track_fronts", "FrontODE", "FrontODEResult", "collision_distance",
            "collision_sensitivity", "SCENARIOS", "compare_fronts", "compare_eigenvalues",
            "FrontEvaluation", "ODECollision", "ODESegment", "SpliceFields", "HandOver",
-           "hand_over", "ModePairing", "ReducedModes", "pair_modes", "reduced_modes"]
+           "hand_over", "ModePairing", "ReducedModes", "pair_modes", "reduced_modes",
+           "NearestSplice", "nearest_splice", "splice_distance"]
 
 #: aliases of qsa.paper, resolved on first use (qsa.paper imports this package)
 _PAPER_ALIASES = {"SCENARIOS": "qsa.paper.scenarios", "compare_fronts": "qsa.paper.fronts",

@@ -351,7 +351,7 @@ class FrontODE:
         return f.positions
 
     def integrate(self, p0, t_final, t_eval=None, rtol=1e-8, atol=None, method="auto",
-                  max_collisions=10, close=True, redistribute="local"):
+                  max_collisions=10, close=True, redistribute="project"):
         """Integrate ``p' = F(p)`` from ``p0``, removing colliding pairs.
 
         See :func:`qsa.reduction.integrate.integrate_fronts` for the parameters.

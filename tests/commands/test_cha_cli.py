@@ -17,8 +17,10 @@ from qsa.equilibria import Equilibrium, circle
 from qsa.io import load, load_equilibrium, save_equilibrium
 from qsa.paper._files import write_output
 from qsa.paper.folded import folded_energy, folded_equilibrium
-from tests.paper.test_folded import REF, RHO, nodes
+from tests.helpers import CHA_REF as REF
+from tests.helpers import folded_nodes as nodes
 
+RHO = 1.5
 PARAMS = {"eps": REF["eps"], "beta": REF["beta"], "rho": RHO, "A0": REF["A0"],
           "l_star": REF["l_star"], "a": REF["a"]}
 L0 = REF["L_star"] / RHO

@@ -41,21 +41,47 @@ def test_polygon_events_match_the_dae(quadrilateral):
     assert c.same_sequence and len(c.dae_events) == 2
     assert [e.kind for e in c.dae_events] == ["facet", "facet"]
     assert c.event_rel_diff[0] < 0.02
-    # the second collapse comes early in the ODE (1.93 against 3.34; the DAE at
-    # N = 1200: 3.16): during the first one the merging corners give the DAE's other
-    # corners more turning than the ODE's (0.09 against 0.08 of length), which leaves
-    # the next facet shorter; it is still the same facet, and the local redistribution
-    # is closer than spreading the pair's turning over all fronts (1.36)
-    uniform = compare_coarsening(dae=dae, redistribute="uniform")
-    assert uniform.same_sequence
+    # the second collapse: 3.49 against the DAE's 3.34 (3.16 at N = 1200), where the
+    # removal alone, without the projection onto the nearest splice, puts it at 1.93
+    # (the pair's turning to the neighbouring corners) or 1.36 (spread over all fronts)
     t_dae = c.dae_events[1].time
-    assert c.ode_events[1].time < t_dae
-    assert abs(c.ode_events[1].time - t_dae) < 0.8 * abs(uniform.ode_events[1].time - t_dae)
+    assert abs(c.ode_events[1].time - t_dae) < 0.06 * t_dae
+    for red in ("local", "uniform"):
+        plain = compare_coarsening(dae=dae, redistribute=red)
+        assert plain.same_sequence
+        assert abs(c.ode_events[1].time - t_dae) < 0.2 * abs(plain.ode_events[1].time - t_dae)
     # the final states: two corners of turning pi each (a lens), the same fronts
     assert c.final_dae.fronts == c.final_ode.fronts
     assert np.allclose(c.final_ode.corner_turning, np.pi, atol=1e-3)
     assert np.allclose(c.final_dae.corner_turning, np.pi, atol=0.05)
     assert abs(c.final_dae.length - c.final_ode.length) < 1e-3
+
+
+def test_hexagon_three_restarts_against_the_dae():
+    """A hexagon whose three short corners collapse in turn (12 -> 6 fronts by t = 0.041).
+
+    DAE N = 300 (its event times move by < 1% to N = 800). The first collapse, before
+    any restart, is the reduction's own error on a short corner (8% late); after the
+    restarts from the nearest splice the next two are 5.5% and 2.2% late and the final
+    triangle's corners turn within 0.003 of the DAE's. The removal alone puts the
+    third event 46% early and the corners 0.03 off.
+    """
+    sc = replace(random_polygon(6, 4, n_short=3, short=(0.22, 0.28)), t_final=0.055)
+    dae = dae_coarsening(sc, N=300)
+    c = compare_coarsening(dae=dae)
+    _check_events(c)
+    assert c.same_sequence and [e.n_fronts for e in c.dae_events] == [10, 8, 6]
+    assert all(e.kind == "corner" for e in c.dae_events)
+    assert c.event_rel_diff[0] < 0.1 and c.event_rel_diff[1] < 0.07
+    assert c.event_rel_diff[2] < 0.05
+    assert c.final_dae.fronts == c.final_ode.fronts
+    off = np.abs(np.subtract(c.final_ode.corner_turning, c.final_dae.corner_turning))
+    assert off.max() < 0.01
+    plain = compare_coarsening(dae=dae, redistribute="local")
+    assert plain.same_sequence
+    assert c.event_rel_diff[2] < 0.2 * plain.event_rel_diff[2]
+    plain_off = np.subtract(plain.final_ode.corner_turning, plain.final_dae.corner_turning)
+    assert off.max() < 0.3 * np.abs(plain_off).max()
 
 
 def test_hand_over_of_a_rotated_profile():
@@ -107,9 +133,10 @@ def test_reproduce_coarsening_cli(tmp_path, capsys):
 def test_facet_coarsening_by_the_ode():
     """f:facet (resolved DAE) from its first quasi-steady state: 12 -> 10 -> 8 -> 6.
 
-    Measured: the same three corner collapses in the same order, at +2.6%, -14%, -5.7%
-    of the DAE's times; the first three annihilations (18 -> 12) happen while the
-    fronts are still forming (R_kappa ~ 1) and are left to the DAE.
+    Measured: the same three corner collapses in the same order, at +2.8%, -0.7%, +1.2%
+    of the DAE's times (the removal alone, without the projection onto the nearest
+    splice: +2.8%, -14%, -5.7%); the first three annihilations (18 -> 12) happen while
+    the fronts are still forming (R_kappa ~ 1) and are left to the DAE.
     """
     c = compare_coarsening(FacetScenario(), N=1200)
     _check_events(c)
@@ -118,9 +145,9 @@ def test_facet_coarsening_by_the_ode():
     assert c.handover_fronts == 12 and c.handover_residual <= 0.3
     assert c.same_sequence and [e.n_fronts for e in c.dae_events] == [10, 8, 6]
     assert all(e.kind == "corner" for e in c.dae_events)
-    assert c.max_event_rel_diff < 0.2
+    assert c.max_event_rel_diff < 0.05
     assert c.final_dae.fronts == c.final_ode.fronts
-    assert np.allclose(c.final_dae.corner_turning, c.final_ode.corner_turning, atol=0.2)
+    assert np.allclose(c.final_dae.corner_turning, c.final_ode.corner_turning, atol=0.03)
     assert c.time_ode < 10
 
 
@@ -130,9 +157,10 @@ def test_pentagons_with_three_short_facets(seed):
     """Random pentagons with three short facets, DAE N = 600, to 1.6 x the ODE's 3rd event.
 
     Measured: the DAE's two events (a facet or a corner first, then a corner) are the
-    ODE's first two, the first within 0.1-2%, the second 12-42% early; the ODE then
-    collapses a corner of the remaining triangle (t = 4.8-9.1) that the DAE keeps
-    (the post-collision states: docs/guide/reduction.md, "Multi-event coarsening").
+    ODE's first two, the first within 0.1-2%, the second within 0.03-5.1% (seeds 6, 5,
+    3; 28-42% early after the removal alone, without the projection onto the nearest
+    splice); the ODE then collapses a corner of the remaining triangle (t = 19-36) that
+    the DAE keeps.
     """
     sc = random_polygon(5, seed, n_short=3, short=(0.25, 0.33))
     eq = sc.splice()
@@ -144,5 +172,4 @@ def test_pentagons_with_three_short_facets(seed):
     assert len(c.dae_events) >= 2 and len(c.ode_events) >= 3
     assert [frozenset(e.fronts) for e in c.dae_events] == \
         [frozenset(e.fronts) for e in c.ode_events[:len(c.dae_events)]]
-    assert c.event_rel_diff[0] < 0.025
-    assert c.ode_events[1].time < c.dae_events[1].time
+    assert c.event_rel_diff[0] < 0.025 and c.event_rel_diff[1] < 0.06

@@ -5,29 +5,15 @@ The state is the reference CHA equilibrium (appendix parameters, l* = 0.5) sampl
 """
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from qsa import Curve, Fourier
 from qsa.paper.folded import folded_equilibrium
-
-REF = json.loads((Path(__file__).parents[1] / "reference"
-                  / "cha_trillium_equilibrium.json").read_text())
+from tests.helpers import CHA_REF as REF
+from tests.helpers import folded_nodes as nodes
 
 RHO = 1.5
-
-
-def nodes(N=160, noise=0.0):
-    c = Curve(REF["kappa"], REF["L"], Fourier(REF["N"]), REF["theta0"], tuple(REF["origin"]))
-    x, y = c.on_grid(Fourier(N + 1)).positions()
-    x, y = x[:N], y[:N]          # N nodes, not quite at equal spacing: a flow's last state
-    if noise:
-        nx, ny = c.on_grid(Fourier(N + 1)).normal()
-        bump = noise * np.cos(5 * np.arange(N) * 2 * np.pi / N)
-        x, y = x + bump * nx[:N], y + bump * ny[:N]
-    return x, y
 
 
 def analyse(x, y, **options):
@@ -83,6 +69,19 @@ def test_failed_polish_reported_without_spectrum():
 def test_bad_nodes():
     with pytest.raises(ValueError, match="x, y"):
         analyse(np.zeros(10), np.zeros(11))
+    from qsa import Curve, FiniteDifference
+
+    with pytest.raises(ValueError, match="x: a Curve guess must be on a Fourier grid"):
+        analyse(Curve.circle(1.0, FiniteDifference(40)), None)
+
+
+def test_curve_guess_without_spectrum(fe):
+    """A polished curve is taken as it is (no resampling of its nodes), no spectrum."""
+    again = analyse(fe.curve, None, with_spectrum=False)
+    assert again.guess is fe.curve and again.spectrum is None and not again.success
+    assert again.polished.success and again.polished.n_newton <= 1
+    assert again.polished.energy.energy(again.curve) == pytest.approx(
+        fe.energy.energy(fe.curve), rel=1e-13)
 
 
 @pytest.mark.slow
