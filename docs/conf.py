@@ -40,7 +40,6 @@ root_doc = "index"
 templates_path = ["_templates"]
 exclude_patterns = [
     "_build",
-    "_notes",
     "Thumbs.db",
     ".DS_Store",
     "**.ipynb_checkpoints",

@@ -35,7 +35,8 @@ def run_page(page, tmp_path, monkeypatch, slow):
 
 def test_every_stage_has_a_page():
     names = {p.stem for p in PAGES}
-    assert {"curves", "energies", "equilibria"} <= names
+    assert {"curves", "energies", "equilibria", "spectra", "flows", "reduction", "sweeps",
+            "cli"} <= names
     toc = (GUIDE / "index.md").read_text()
     assert all(f"\n{name}\n" in toc for name in names), "a page is missing from the toctree"
     assert all(blocks(p) for p in PAGES), "every page has examples"

@@ -70,7 +70,11 @@ def test_polygon_scenario():
 
 @pytest.mark.slow
 def test_regular_polygon_family():
-    """3 ... 8 corners x facets 0.25 ... 0.5 (measured table: the reduction guide)."""
+    """3 ... 8 corners x facets 0.25 ... 0.5.
+
+    The measured table: docs/guide/reduction.md, "Slow eigenvalues on the regular
+    polygon families".
+    """
     corr, unc = {}, {}
     for n in range(3, 9):
         for f in (0.25, 0.3, 0.35, 0.4, 0.5):
