@@ -4,6 +4,7 @@ reference runs used by several test modules (no test module imports another)."""
 import json
 import math
 import os
+import re
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -315,3 +316,18 @@ def folded_nodes(N=160, noise=0.0):
         bump = noise * np.cos(5 * np.arange(N) * 2 * np.pi / N)
         x, y = x + bump * nx[:N], y + bump * ny[:N]
     return x, y
+
+
+_TEST_ID = re.compile(r"(tests/[\w/]+\.py)::(\w+)")
+
+
+def undefined_tests(page):
+    """The ``tests/...py::name`` ids a docs page names, and those not defined in their file."""
+    root = Path(__file__).resolve().parent.parent
+    ids = set(_TEST_ID.findall(page.read_text()))
+    missing = []
+    for file, name in sorted(ids):
+        path = root / file
+        if not path.is_file() or not re.search(rf"^def {name}\(", path.read_text(), re.M):
+            missing.append(f"{file}::{name}")
+    return ids, missing

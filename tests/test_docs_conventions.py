@@ -8,11 +8,12 @@ each convention and erratum (``tests/...py::test_name``); each must be defined t
 import re
 from pathlib import Path
 
+from tests.helpers import undefined_tests
+
 ROOT = Path(__file__).resolve().parent.parent
 PAGE = ROOT / "docs" / "conventions.md"
 # the phrase may be wrapped across lines, also inside ``#`` comments
 CITATION = re.compile(r"Conventions and errata,\s*(?:#\s*)?section\s+(\d+)")
-TEST_ID = re.compile(r"(tests/[\w/]+\.py)::(\w+)")
 
 
 def page_sections():
@@ -41,17 +42,6 @@ def test_every_cited_section_exists():
     assert len(cited) >= 5  # the pattern does find the citations
     missing = {n: files for n, files in cited.items() if n not in page_sections()}
     assert not missing, missing
-
-
-def undefined_tests(page):
-    """The ``tests/...py::name`` ids a page names, and those not defined in their file."""
-    ids = set(TEST_ID.findall(page.read_text()))
-    missing = []
-    for file, name in sorted(ids):
-        path = ROOT / file
-        if not path.is_file() or not re.search(rf"^def {name}\(", path.read_text(), re.M):
-            missing.append(f"{file}::{name}")
-    return ids, missing
 
 
 def test_every_named_test_is_defined():

@@ -5,7 +5,7 @@ from pathlib import Path
 
 from qsa.commands.reproduce import REPRODUCTIONS
 from qsa.paper import CONVERGENCE
-from tests.test_docs_conventions import undefined_tests
+from tests.helpers import undefined_tests
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 PAGE = DOCS / "paper-results.md"

@@ -22,6 +22,7 @@ from qsa.energies import Energy
 from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
 from qsa.equilibria.result import Equilibrium
 from qsa.equilibria.system import EquilibriumSystem, equal_arclength
+from qsa.equilibria.transient import pseudo_transient
 from qsa.linalg import factorize
 
 # multipliers, normal_velocity and residual_scale are properties of the energy on the
@@ -431,9 +432,7 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
 
 def _globalized(system, x0, first: NewtonRun, tol, maxiter, line_search):
     """The pseudo-transient rescue of a failed Newton solve, as one :class:`NewtonRun`."""
-    from qsa.equilibria.transient import pseudo_transient
-
-    tr = pseudo_transient(system, x0, tol=tol, maxiter=10 * maxiter,
+    tr = pseudo_transient(system, x0, newton_solve, tol=tol, maxiter=10 * maxiter,
                           newton_maxiter=min(maxiter, 12), line_search=line_search)
     n_newton = first.n_newton + tr.n_newton
     n_lu = first.n_lu + tr.n_lu

@@ -32,14 +32,17 @@ rises, as long as no single step raises it more than twofold.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 
 from qsa.energies.constrained import residual_scale
-from qsa.equilibria.newton import NewtonRun, newton_solve
 from qsa.geometry import laplace_s
 from qsa.linalg import factorize
+
+if TYPE_CHECKING:
+    from qsa.equilibria.newton import NewtonRun
 
 __all__ = ["TransientRun", "pseudo_transient"]
 
@@ -114,7 +117,7 @@ def _initial_dt(system, x, G, F):
     return 0.01 * size / rate if rate > 0 else 1.0
 
 
-def pseudo_transient(system, x0, *, tol=1e-10, maxiter=400, newton_maxiter=12,
+def pseudo_transient(system, x0, solve, *, tol=1e-10, maxiter=400, newton_maxiter=12,
                      attempt_gain=0.7, energy=None, dt0=None, check_curve=True,
                      line_search=True) -> TransientRun:
     """Follow the gradient flow from ``x0`` with growing implicit steps (module docstring).
@@ -123,6 +126,9 @@ def pseudo_transient(system, x0, *, tol=1e-10, maxiter=400, newton_maxiter=12,
     ----------
     system : EquilibriumSystem
     x0 : ndarray, shape (system.size,)
+    solve : callable
+        The Newton solver, :func:`~qsa.equilibria.newton.newton_solve` (its signature:
+        ``solve(system, x, tol, maxiter, energy=..., line_search=...) -> NewtonRun``).
     tol : float
         Target of the Newton solves (relative residual,
         :meth:`EquilibriumSystem.scaled_norm`).
@@ -205,8 +211,8 @@ def pseudo_transient(system, x0, *, tol=1e-10, maxiter=400, newton_maxiter=12,
         if r <= attempt_gain * last_try:
             last_try = r
             n_attempts += 1
-            newton = newton_solve(system, x, tol, newton_maxiter, energy=energy,
-                                  line_search=line_search)
+            newton = solve(system, x, tol, newton_maxiter, energy=energy,
+                           line_search=line_search)
             n_newton += newton.n_newton
             n_lu += newton.n_lu
             if newton.success:

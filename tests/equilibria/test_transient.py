@@ -6,6 +6,7 @@ import pytest
 from qsa import Curve, FiniteDifference, Fourier
 from qsa.energies import Faceting, Perimeter
 from qsa.equilibria import polish
+from qsa.equilibria.newton import newton_solve
 from qsa.equilibria.system import EquilibriumSystem, equal_arclength
 from qsa.equilibria.transient import _flow_matrix, pseudo_transient
 from qsa.geometry import laplace_s
@@ -71,11 +72,11 @@ def test_globalized_polish_where_newton_fails():
 def test_pseudo_transient_record():
     c = equal_arclength(square_guess(Fourier(65)))
     S = EquilibriumSystem(E, c)
-    run = pseudo_transient(S, S.pack(c), tol=1e-10)
+    run = pseudo_transient(S, S.pack(c), newton_solve, tol=1e-10)
     assert run.success and run.n_attempts >= 1 and run.n_steps >= 1
     assert run.dt.size == run.n_steps and np.all(run.dt > 0)
     assert run.time == pytest.approx(run.dt.sum())
     assert run.history[0] == max(run.history)
     # nothing to do at a solution: no flow step, no Newton solve tried
-    done = pseudo_transient(S, run.newton.x, tol=1e-6, maxiter=0)
+    done = pseudo_transient(S, run.newton.x, newton_solve, tol=1e-6, maxiter=0)
     assert done.n_steps == 0 and done.newton is None and not done.success
