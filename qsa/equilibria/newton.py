@@ -439,8 +439,8 @@ def _globalized(system, x0, first: NewtonRun, tol, maxiter, line_search):
     flow = (f"; {tr.n_steps} pseudo-transient flow steps ({tr.n_rejected} rejected, "
             f"pseudo time {tr.time:.3g}) and {tr.n_attempts} Newton solves after the first "
             f"failed ({MESSAGES[first.status]})")
-    if tr.success:
-        nr = tr.newton
+    nr = tr.newton
+    if tr.success and nr is not None:
         return NewtonRun(nr.x, nr.status, nr.history, n_newton, n_lu, nr.noise_floor), flow
     if tr.history.size and tr.history.min() < first.history.min():
         scale = residual_scale(system.energy, system.curve(tr.x))
