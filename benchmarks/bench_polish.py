@@ -20,16 +20,20 @@ from qsa.equilibria import npulse
 from qsa.equilibria.newton import polish
 
 
-def perturbed(eq, amp=0.05):
-    """A smooth 3-fold symmetric perturbation of kappa and of the length.
+def perturbed(eq, amp=0.02):
+    """A smooth 3-fold symmetric normal displacement of the nodes, ``amp`` of the radius.
 
-    (Asymmetric perturbations of well-separated fronts move along the exponentially
-    slow manifold of front positions, where the Newton matrix is nearly singular.)
+    The perturbed curve is closed and simple at every N (perturbing kappa alone would
+    break the closure). (Asymmetric perturbations of well-separated fronts move along
+    the exponentially slow manifold of front positions, where the Newton matrix is
+    nearly singular.)
     """
     c = eq.curve
     s = c.grid.s
-    return Curve(c.kappa + amp * np.cos(6 * np.pi * s + 0.3), c.g * (1 + amp / 5), c.grid,
-                 c.theta0, c.origin)
+    x, y = c.positions()
+    nx, ny = c.normal()
+    d = amp * c.length() / (2 * np.pi) * np.cos(6 * np.pi * s + 0.3)
+    return Curve.from_positions(x + d * nx, y + d * ny, c.grid)
 
 
 def run(grid, alpha=0.15, n_pulses=3):
