@@ -274,7 +274,7 @@ def folded_modes_figure(results, n_modes=2, size=3.2):
     """
     rows = [r for r in results if r.spectrum is not None]
     fig, axes = new_figure(ncols=n_modes, nrows=max(len(rows), 1),
-                           size=(size * n_modes, size * max(len(rows), 1)))
+                           size=(size, size))
     axes = np.atleast_2d(axes).reshape(max(len(rows), 1), n_modes)
     for r, row in zip(rows, axes, strict=False):
         x, y = r.curve.positions()

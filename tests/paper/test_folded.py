@@ -55,6 +55,8 @@ def test_slowest_modes_figure(fe):
     assert len(lcs) == 2
     phi = fe.spectrum.eigenvectors[:, fe.slowest[0]]
     assert np.allclose(lcs[0].get_array(), phi / np.abs(phi).max())
+    # one panel of 3.2 x 3.2 inches per mode (the figure is not stretched n_modes times)
+    assert np.allclose(fig.get_size_inches(), (2 * 3.2, 3.2))
     plt.close(fig)
 
 
