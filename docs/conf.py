@@ -60,8 +60,9 @@ numpydoc_xref_param_type = False
 # -- Notebooks and MyST --------------------------------------------------------------
 # notebooks/ is the single source of the notebooks (stored without outputs). The build
 # copies them into docs/notebooks/ (not tracked) and executes them there, caching the
-# outputs in the build directory: a notebook runs again only when its source changes,
-# and a failing cell (an assert of a headline number) fails the build.
+# outputs in the build directory: a notebook runs again only when its source changes
+# (after a change to qsa itself, delete _build/ to rerun them), and a failing cell
+# (an assert of a headline number) fails the build.
 DOCS = Path(__file__).resolve().parent
 BUILD = DOCS / "_build"
 
