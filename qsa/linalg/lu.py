@@ -119,6 +119,25 @@ class Factorization:
             schur = np.asarray(D, dtype=float) - self._B2 @ self._Z
             self._schur = sla.lu_factor(schur)
 
+    @classmethod
+    def from_solver(cls, solver, B1=None, B2=None, D=None) -> Factorization:
+        """A bordered factorization around a core that is solved by other means.
+
+        Parameters
+        ----------
+        solver : object
+            With ``shape`` (square), ``nnz``, ``solve(b)`` (``b`` of shape (n,) or
+            (n, k)) and ``det_sign()``.
+        B1, B2, D : ndarray, optional
+            The border, as in :func:`factorize`.
+
+        Returns
+        -------
+        Factorization
+        """
+        return cls(_Shape(solver.shape[0]), B1, B2, D,
+                   _core=(solver.solve, int(solver.nnz), solver.det_sign))
+
     def with_border(self, B1=None, B2=None, D=None) -> Factorization:
         """The same core ``C`` (not factored again) with another border.
 

@@ -258,6 +258,50 @@ class ReducedHessian:
         t = self.Luu @ u + self.Lyu.T @ z
         return t - self.cU.T @ self._solve_cY(self.Lyu @ u + self.Lyy @ z, trans="T")
 
+    def core_matmat(self, Q, block=512):
+        """``K Q`` as a dense ``(p, k)`` array for a sparse ``Q`` with few entries per column.
+
+        ``K Q`` by :meth:`core_matvec` costs ``nnz(Lyy) k`` (the products of the wide
+        two-point blocks with the dense ``Z Q``). Here they are taken the other way round:
+        ``Lyy Z Q = -(cY^{-T} Lyy)^T (cU Q)`` (``Lyy`` symmetric) and
+        ``Lyu^T Z Q = -(cY^{-T} Lyu)^T (cU Q)``, with ``cY^{-T}`` applied to ``block``
+        densified columns of ``[Lyy, Lyu]`` at a time: ``O(m (m + p))`` work with a
+        triangular ``cY``, ``O(m block + (m + p) k)`` memory.
+
+        Parameters
+        ----------
+        Q : sparse matrix, shape (p, k)
+        block : int
+            Columns of ``[Lyy, Lyu]`` densified at a time.
+
+        Returns
+        -------
+        ndarray, shape (p, k)
+
+        Examples
+        --------
+        >>> import numpy as np, scipy.sparse as sp
+        >>> n = 6
+        >>> Bd = sp.eye(n) - sp.eye(n, k=-1)
+        >>> Lyy = sp.csr_matrix(np.add.outer(np.arange(n), np.arange(n)) % 3 + np.eye(n))
+        >>> K = ReducedHessian(sp.eye(n), sp.eye(n, k=1), Lyy, Bd, -sp.eye(n))
+        >>> Q = sp.random(n, 4, density=0.4, random_state=0)
+        >>> bool(np.allclose(K.core_matmat(Q, block=4), K.core_matvec(Q.toarray())))
+        True
+        """
+        Q = sp.csr_matrix(Q)
+        p, m, k = self.Luu.shape[0], self.cY.shape[0], Q.shape[1]
+        cUQt = sp.csr_matrix((self.cU @ Q).T)                   # (k, m)
+        wide = sp.hstack([self.Lyy, self.Lyu], format="csc")    # (m, m + p)
+        T1 = np.empty((m + p, k))                               # [Lyy Z Q; Lyu^T Z Q]
+        for start in range(0, m + p, block):
+            stop = min(m + p, start + block)
+            W = self._solve_cY(wide[:, start:stop].toarray(), trans="T")  # (m, b)
+            T1[start:stop] = -np.asarray(cUQt @ W).T
+        ty = np.asarray((self.Lyu @ Q).toarray()) + T1[:m]
+        return (np.asarray((self.Luu @ Q).toarray()) + T1[m:]
+                - self.cU.T @ self._solve_cY(ty, trans="T"))
+
     def __matmul__(self, other):
         if isinstance(other, ReducedHessian):
             return NotImplemented

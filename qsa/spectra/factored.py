@@ -70,7 +70,8 @@ import scipy.sparse.linalg as spla
 
 from qsa import geometry
 from qsa.curve import Curve
-from qsa.linalg import ReducedHessian, SparsePlusLowRank, factorize
+from qsa.linalg import Factorization, ReducedHessian, SparsePlusLowRank, factorize
+from qsa.spectra.capacitance import CapacitanceCore, use_capacitance
 
 __all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
 
@@ -407,6 +408,14 @@ class ShiftInvert:
         ``<.,.>``-orthonormal rows spanning the constraints' normal variations
         (orthogonal to ``deflate``): the problem is posed on their complement.
 
+    Attributes
+    ----------
+    core_solver : str
+        How the core system is solved: ``"dense"`` (LAPACK, Fourier grids),
+        ``"superlu"`` (sparse LU) or ``"capacitance"`` (a two-point energy with wide
+        neighbourhoods on a finite-difference grid, eliminated onto an ``N x N``
+        capacitance matrix: :class:`~qsa.spectra.capacitance.CapacitanceCore`).
+
     Examples
     --------
     >>> import numpy as np
@@ -440,6 +449,7 @@ class ShiftInvert:
             blocks = [[A11, -(dgk @ Hgk), -G.T],
                       [-(Hkg @ dgk), -Hkk, I],
                       [-G, I, None]]
+            local = blocks
             if op.reduced is not None:
                 blocks = _with_implicit_state(blocks, op.reduced, dgk, N)
             core = sp.bmat(blocks, format="csc")
@@ -469,7 +479,18 @@ class ShiftInvert:
         D = np.zeros((r + m, r + m))
         D[:r, :r] = np.eye(r)
         self._B1, self._B2, self._D = B1, B2, D
-        self._lu = factorize(core, B1, B2, D)
+        self._lu = None
+        self.core_solver = "dense" if not sparse else "superlu"
+        if sparse and op.reduced is not None and use_capacitance(op.reduced, N):
+            try:
+                cap = CapacitanceCore(local, op.reduced, dgk, N)
+            except np.linalg.LinAlgError:
+                pass  # a singular local block or capacitance: the whole system by SuperLU
+            else:
+                self._lu = Factorization.from_solver(cap, B1, B2, D)
+                self.core_solver = "capacitance"
+        if self._lu is None:
+            self._lu = factorize(core, B1, B2, D)
         self._free = None
         self._ext = None
         self._core_rows = None

@@ -1,0 +1,172 @@
+"""Solves with the shift-invert core of a two-point energy through an ``N x N`` capacitance.
+
+On a finite-difference grid the shift-invert system of :class:`~qsa.spectra.factored.ShiftInvert`
+for an energy with a two-point term has the unknowns ``z = (phi, psi, chi)`` of the local
+``3N`` system and the implicit state of the two-point Hessian ``Lf K Rf``
+(:class:`~qsa.linalg.ReducedHessian`): ``u`` (``p``), ``v = K u`` (``p``), the state ``y``
+and its adjoint ``mu`` (``q`` each). Its rows are ::
+
+    A z + E v = b_z                        (A the local 3N block, E = [-gk Lg; -Lk; 0])
+    u - F z = b3                           (F z = Rg gk phi + Rk psi)
+    Luu u - v + Lyu^T y + cU^T mu = b4
+    Lyu u + Lyy y + cY^T mu = b5
+    cU u + cY y = b6
+
+When the kernel's neighbourhoods hold many nodes, ``Lyy`` and ``Lyu`` are wide: a sparse
+LU of the whole system fills in like a dense one of size ``~3N`` and each of its solves
+reads the whole fill. Eliminated in the order below, the only dense matrix to factor is
+``N x N``. The last four rows give ``v = K u + v_b`` (``K`` applied by two triangular
+solves with ``cY``); the third row of ``A`` makes ``psi = b_psi + G phi`` for every
+solution, so ``F z = Q phi + Rk b_psi`` with the sparse ``Q = Rg gk + Rk G``; then
+(Woodbury) ::
+
+    (I + Gv K Q) phi = [A^{-1} (b_z - E V(b3 + Rk b_psi, b4, b5, b6))]_phi,
+
+``Gv = [A^{-1} E]_phi`` (``N`` transposed solves with ``A``) and ``K Q`` from
+:meth:`~qsa.linalg.ReducedHessian.core_matmat` (``O(q (q + p))`` work). The capacitance
+``T = I + Gv K Q`` is factored by LAPACK; one solve is two local sparse solves, two
+applications of the implicit state (``O(nnz)``) and ``O(N^2)`` with the factors of ``T``.
+The elimination is exact in exact arithmetic; :class:`ShiftInvert` refines every solve
+against the residual of the whole sparse system, so its error estimates do not depend on
+which factorization is used. ``det`` of the system is ``(-1)^(p + q) det A det T``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from qsa.linalg.lu import permutation_parity
+
+__all__ = ["CapacitanceCore", "use_capacitance"]
+
+# the capacitance route is taken when Lyy holds at least this fraction of a dense block
+WIDE_DENSITY = 0.02
+# and at least this many nodes (below it SuperLU is fast whatever the fill)
+MIN_NODES = 400
+# a capacitance whose rcond is not above this is singular (SuperLU takes the system)
+MIN_RCOND = 0.0
+
+
+def use_capacitance(K, N) -> bool:
+    """Whether the implicit state's two-point blocks are wide enough for :class:`CapacitanceCore`.
+
+    Parameters
+    ----------
+    K : ReducedHessian
+        The implicit-state part of the (weighted) Lagrangian Hessian.
+    N : int
+        Nodes.
+
+    Returns
+    -------
+    bool
+    """
+    q = K.cY.shape[0]
+    return bool(q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_DENSITY * q * q)
+
+
+class CapacitanceCore:
+    """Solutions with the shift-invert core of a two-point energy (module docstring).
+
+    Parameters
+    ----------
+    local : list of list
+        The ``3 x 3`` sparse blocks of the local system ``A`` (``N`` rows each).
+    K : ReducedHessian
+        The implicit-state part ``Lf K Rf`` (weighted).
+    dgk : sparse matrix, shape (N, N)
+        ``diag(g kappa)``.
+    N : int
+    block : int
+        Columns densified at a time while forming ``K Q`` and ``Gv``.
+
+    Attributes
+    ----------
+    shape : tuple of int
+        The core's shape, ``(3N + 2p + 2q,) * 2``.
+    nnz : int
+        Stored entries of the factors (local LU, capacitance and ``Gv``).
+    rcond : float
+        LAPACK's estimate of the reciprocal 1-norm condition number of ``T``.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        The local block or the capacitance is singular to working precision.
+    """
+
+    def __init__(self, local, K, dgk, N, block=512):
+        self.N, self.K = N, K
+        p, q = K.Luu.shape[0], K.cY.shape[0]
+        self.p, self.q = p, q
+        self.shape = (3 * N + 2 * p + 2 * q,) * 2
+        A = sp.bmat(local, format="csc")
+        try:
+            self._A = spla.splu(A)
+        except RuntimeError as exc:
+            raise np.linalg.LinAlgError(f"singular local block: {exc}") from None
+        Lk, Lg = K.left[:N], K.left[N:]
+        Rk, Rg = K.right[:, :N], K.right[:, N:]
+        G = sp.csr_matrix(local[2][0]) * -1.0  # the third block row is [-G, I, 0]
+        self._Rk = sp.csr_matrix(Rk)
+        self._LyuT, self._cUT = sp.csr_matrix(K.Lyu.T), sp.csr_matrix(K.cU.T)
+        self._E = sp.vstack([-(dgk @ Lg), -Lk, sp.csr_matrix((N, p))], format="csr")
+        self._Q = sp.csr_matrix(Rg @ dgk + Rk @ G)
+        KQ = K.core_matmat(self._Q, block=block)                  # (p, N)
+        Et = sp.csr_matrix(self._E.T)
+        Gv = np.empty((N, p))
+        for start in range(0, N, block):
+            stop = min(N, start + block)
+            rhs = np.zeros((3 * N, stop - start))
+            rhs[np.arange(start, stop), np.arange(stop - start)] = 1.0
+            Gv[start:stop] = np.asarray(Et @ self._A.solve(rhs, trans="T")).T
+        self._Gv = Gv
+        T = Gv @ KQ
+        T[np.diag_indices(N)] += 1.0
+        if not np.all(np.isfinite(T)):
+            raise np.linalg.LinAlgError("the capacitance has non-finite entries")
+        anorm = np.abs(T).sum(axis=0).max()
+        lu, piv = sla.lu_factor(T, check_finite=False)
+        self._T = (lu, piv)
+        rcond, info = sla.lapack.dgecon(lu, anorm, norm="1")
+        self.rcond = float(rcond)
+        if info != 0 or not self.rcond > MIN_RCOND:
+            raise np.linalg.LinAlgError(f"ill-conditioned capacitance (rcond {self.rcond:.2e})")
+        self.nnz = int(self._A.L.nnz + self._A.U.nnz + N * N + N * p)
+
+    def _state(self, u, b4, b5, b6):
+        """``(v, y, mu)`` of the last four block rows for given ``u``."""
+        K = self.K
+        y = K._solve_cY(b6 - K.cU @ u)
+        mu = K._solve_cY(b5 - K.Lyu @ u - K.Lyy @ y, trans="T")
+        v = K.Luu @ u + self._LyuT @ y + self._cUT @ mu - b4
+        return v, y, mu
+
+    def solve(self, b):
+        """``x`` with ``core x = b``; ``b`` of shape (n,) or (n, k)."""
+        b = np.asarray(b, dtype=float)
+        N, p, q = self.N, self.p, self.q
+        cuts = np.cumsum([3 * N, p, p, q])
+        bz, b3, b4, b5, b6 = np.split(b, cuts, axis=0)
+        u0 = b3 + self._Rk @ bz[2 * N:]  # psi = b_psi + G phi, b_psi in the third rows
+        if np.any(u0) or np.any(b4) or np.any(b5) or np.any(b6):
+            z0 = self._A.solve(bz - self._E @ self._state(u0, b4, b5, b6)[0])
+        else:  # v0 = 0 (a right-hand side in the phi rows only)
+            z0 = self._A.solve(bz)
+        phi = sla.lu_solve(self._T, z0[:N], check_finite=False)
+        u = u0 + self._Q @ phi
+        v, y, mu = self._state(u, b4, b5, b6)
+        z = self._A.solve(bz - self._E @ v)
+        return np.concatenate([z, u, v, y, mu], axis=0)
+
+    def det_sign(self) -> int:
+        """Sign of the determinant of the core, ``(-1)^(p + q) sign(det A) sign(det T)``."""
+        lu = self._A
+        s = int(np.prod(np.sign(lu.U.diagonal())))
+        s *= permutation_parity(lu.perm_r) * permutation_parity(lu.perm_c)
+        tl, piv = self._T
+        s *= int(np.prod(np.sign(np.diag(tl)))) * (-1) ** int(np.sum(piv != np.arange(piv.size)))
+        return s * (-1) ** (self.p + self.q)

@@ -1,0 +1,86 @@
+"""The capacitance solve of the shift-invert system of a two-point energy against SuperLU."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from qsa import Curve, FiniteDifference
+from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
+from qsa.linalg import factorize
+from qsa.spectra import (
+    FactoredNormalOperator,
+    certified_eigenpairs,
+    lagrange_hessian,
+    rigid_normal_basis,
+)
+from qsa.spectra import capacitance as cap
+from qsa.spectra.factored import ShiftInvert
+
+
+def _operator(N, l_star):
+    c = Curve.polar(lambda t: 1 + 0.3 * np.cos(3 * t) + 0.05 * np.sin(5 * t),
+                    FiniteDifference(N))
+    E = (CanhamHelfrich(0.1) + Perimeter(1.0, 1.2 * c.length())
+         + Adhesion(A0=10.0, l_star=l_star, a=1.0))
+    LH = lagrange_hessian(E, c, constraints="curvature")
+    return c, FactoredNormalOperator.from_lagrangian(c, LH.matrix)
+
+
+@pytest.fixture
+def forced(monkeypatch):
+    """Take the capacitance route whatever the size and width."""
+    monkeypatch.setattr(cap, "MIN_NODES", 0)
+    monkeypatch.setattr(cap, "WIDE_DENSITY", 0.0)
+
+
+@pytest.fixture
+def never(monkeypatch):
+    monkeypatch.setattr(cap, "WIDE_DENSITY", np.inf)
+
+
+def test_core_matmat_is_core_matvec_of_the_dense_columns():
+    _, op = _operator(160, 0.1)
+    K = op.reduced
+    Q = sp.random(K.Luu.shape[0], 37, density=0.02, random_state=1, format="csr")
+    want = K.core_matvec(Q.toarray())
+    got = K.core_matmat(Q, block=50)
+    assert np.linalg.norm(got - want) <= 1e-12 * np.linalg.norm(want)
+
+
+@pytest.mark.parametrize("sigma", [0.0, -3.0, 40.0])
+def test_capacitance_solves_the_whole_core(forced, sigma):
+    c, op = _operator(200, 0.1)
+    si = ShiftInvert(op, sigma)
+    assert si.core_solver == "capacitance"
+    core = si._core
+    n = core.shape[0]
+    b = np.random.default_rng(2).standard_normal((n, 3))
+    x = si._lu._solve(b)  # the core alone, without the border
+    ref = spla.splu(sp.csc_matrix(core)).solve(b)
+    assert np.linalg.norm(x - ref) <= 1e-9 * np.linalg.norm(ref)
+    assert si._lu._core_sign() == factorize(core).det_sign()
+
+
+def test_eigenpairs_agree_between_the_two_core_solvers(monkeypatch):
+    c, op = _operator(240, 0.1)
+    rigid = op.ritz(rigid_normal_basis(c))[0]
+    out = {}
+    for route, (nodes, width) in {"superlu": (10**9, np.inf), "capacitance": (0, 0.0)}.items():
+        monkeypatch.setattr(cap, "MIN_NODES", nodes)
+        monkeypatch.setattr(cap, "WIDE_DENSITY", width)
+        assert op.shift_invert(0.0).core_solver == route
+        out[route] = certified_eigenpairs(op, np.zeros((0, c.N)), k=8, sigma=0.0, rigid=rigid)
+    a, b = out["superlu"], out["capacitance"]
+    assert np.all(b.errors <= 1e-8 * np.maximum(np.abs(b.values), 1.0))
+    assert np.allclose(np.sort(a.values), np.sort(b.values), rtol=0,
+                       atol=float(np.max(a.errors + b.errors)))
+
+
+def test_route_follows_the_width_of_the_two_point_blocks():
+    _, narrow = _operator(cap.MIN_NODES, 0.01)
+    _, wide = _operator(cap.MIN_NODES, 0.1)
+    assert not cap.use_capacitance(narrow.reduced, narrow.N)
+    assert cap.use_capacitance(wide.reduced, wide.N)
+    assert narrow.shift_invert(0.0).core_solver == "superlu"
+    assert wide.shift_invert(0.0).core_solver == "capacitance"
