@@ -296,7 +296,7 @@ class ReducedHessian:
         T1 = np.empty((m + p, k))                               # [Lyy Z Q; Lyu^T Z Q]
         for start in range(0, m + p, block):
             stop = min(m + p, start + block)
-            W = self._solve_cY(wide[:, start:stop].toarray(), trans="T")  # (m, b)
+            W = self._solve_cY(wide[:, start:stop].toarray(order="F"), trans="T")  # (m, b)
             T1[start:stop] = -np.asarray(cUQt @ W).T
         ty = np.asarray((self.Lyu @ Q).toarray()) + T1[:m]
         return (np.asarray((self.Luu @ Q).toarray()) + T1[m:]

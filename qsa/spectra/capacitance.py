@@ -120,7 +120,7 @@ class CapacitanceCore:
         Gv = np.empty((N, p))
         for start in range(0, N, block):
             stop = min(N, start + block)
-            rhs = np.zeros((3 * N, stop - start))
+            rhs = np.zeros((3 * N, stop - start), order="F")  # SuperLU solves columns
             rhs[np.arange(start, stop), np.arange(stop - start)] = 1.0
             Gv[start:stop] = np.asarray(Et @ self._A.solve(rhs, trans="T")).T
         self._Gv = Gv

@@ -221,8 +221,10 @@ def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol, energy=None)
     N = curve.N
     L = LH.matrix
     H = LH.energy_hessian
-    normL = operator_norm(curve, L)
-    normH = operator_norm(curve, H)
+    # scales of the relative residuals below: a digit is enough, and each product with a
+    # two-point Hessian passes over all its pairs
+    normL = operator_norm(curve, L, iters=12)
+    normH = operator_norm(curve, H, iters=12)
     Mmat = geometry.M(curve)
     normM = operator_norm(curve, Mmat)
     ks = curve.grad_s(curve.kappa)
