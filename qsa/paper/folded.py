@@ -14,10 +14,11 @@ projection of ``V^n`` on that mode's eigenspace, to compare with the eigenvalue.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from qsa import Curve, Fourier
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
@@ -149,26 +150,43 @@ class FoldedEquilibrium:
         return out
 
 
-def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=2.0, tol=1e-7,
-                    snapshots=12, max_time=None, richardson=True):
+def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=3.0, tol=1e-7,
+                    snapshots=25, max_time=None, richardson=True, symmetric=True):
     """Perturb a polished folded state along an eigenmode; fit the CHA flow's decay rate.
 
     The nodes are displaced normally by ``amplitude`` (max norm) times the eigenvector
     ``phi`` (normal gauge); the CHA DAE (finite differences, BDF2) runs for ``efolds``
     e-folding times (at most ``max_time``), with ``rho`` rescaled so that its length
     target ``rho L0`` is the equilibrium's ``L_star`` (the flow binds ``L0`` to its
-    initial length). ``V^n`` at the snapshots is projected (least squares) onto the
-    eigenspace of the eigenvalue (eigenvectors within ``1e-6`` relative, with the rigid
-    motions' normal velocities: the finite-difference DAE drifts rigidly at the order of
-    its discretization, which is no decay); the rate is the slope of the log of the
-    projection's norm over the snapshots after the third.
+    initial length).
+
+    Three effects of the finite-difference DAE are removed before the fit:
+
+    * it has no exact equilibrium (the rigid-motion identities of the two-point
+      ``V^n`` hold only to the grid's order), so from the Fourier equilibrium it drifts
+      rigidly and relaxes to a nearby state of its own. With ``symmetric`` it runs from
+      ``+amplitude`` and from ``-amplitude`` and half the difference of the two ``V^n``
+      is taken: what the runs share cancels, and so does the quadratic part of the
+      response;
+    * the rigid drift is carried by normal velocities, so the nodes slide along the
+      shape (the parametrization's origin moves by a fraction of a node per unit time,
+      at slightly different speeds in the two runs), and comparing ``V^n`` node by node
+      would mix in the drift's gradient times that difference, which does not decay.
+      Each snapshot is registered on the equilibrium -- the parameter shift (Fourier
+      interpolation) and rigid motion that best match its nodes to the equilibrium's
+      -- and its ``V^n`` shifted back before the difference;
+    * the difference is projected (least squares) onto the eigenspace of the eigenvalue
+      (eigenvectors within ``1e-6`` relative, with the rigid motions' normal
+      velocities); its other components decay faster, so the fit (the slope of the log
+      of the projection's norm) starts after one e-folding time. ``window`` is the
+      spread of the rates fitted on the two halves of that window.
 
     The DAE's rate differs from the eigenvalue of the (Fourier) equilibrium by its
-    finite-difference error, ``O(h^2)``: at folds whose radius is a few ``h`` that is
-    several percent. With ``richardson`` the flow runs on ``N1 = fe.N`` and
-    ``N2 = 2 N1 - 1`` nodes (the state and the eigenspace resampled spectrally) and the
-    rate is extrapolated, ``r = (q^2 r2 - r1) / (q^2 - 1)`` with ``q = N2 / N1``; the
-    difference to the finer rate, ``|r - r2|``, is reported as ``rate_error``.
+    finite-difference error, ``O(h^2)``. With ``richardson`` the flow runs on
+    ``N1 = fe.N`` and ``N2 = 2 N1 - 1`` nodes (the state and the eigenspace resampled
+    spectrally) and the rate is extrapolated, ``r = (q^2 r2 - r1) / (q^2 - 1)`` with
+    ``q = N2 / N1``; ``rate_error`` is the larger of ``|r - r2|`` and the finer grid's
+    window spread.
 
     Parameters
     ----------
@@ -178,13 +196,16 @@ def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=2.0
         Index into the spectrum; default the slowest decaying non-kernel mode.
     richardson : bool
         Extrapolate from two grids (default) or measure on ``fe.N`` nodes only.
+    symmetric : bool
+        Difference of the runs from ``+amplitude`` and ``-amplitude`` (default), or the
+        run from ``+amplitude`` alone.
 
     Returns
     -------
     dict
         ``mode, eigenvalue, multiplicity, measured_rate, relative_error, rate_error,
-        rates`` (per grid: ``N, rate, n_steps``)``, t_final, success, n_steps``, and
-        ``"_flow"`` = (FlowResult, times, projected amplitude) of the finest run.
+        rates`` (per grid: ``N, rate, window, n_steps``)``, t_final, success, n_steps``,
+        and ``"_flow"`` = (FlowResult, times, projected amplitude) of the finest run.
     """
 
     sp = fe.spectrum
@@ -201,33 +222,71 @@ def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=2.0
     lam1 = float(lam[i])
     if not lam1 < 0:
         raise ValueError(f"mode: eigenvalue {lam1:.3g} of mode {i} is >= 0, it does not decay")
+    if not efolds > 1:
+        raise ValueError(f"efolds: need more than one e-folding time to fit after the "
+                         f"first, got {efolds}")
     same = np.flatnonzero((np.abs(lam - lam1) <= 1e-6 * abs(lam1)) & ~sp.is_kernel)
     T = efolds / abs(lam1)
     if max_time is not None:
         T = min(T, float(max_time))
     sizes = [fe.N, 2 * fe.N - 1] if richardson else [fe.N]
-    runs = [_decay_rate(fe, i, same, N, amplitude, T, tol, snapshots) for N in sizes]
+    runs = [_decay_rate(fe, i, same, N, amplitude, T, tol, snapshots, symmetric)
+            for N in sizes]
     rates = [r[0] for r in runs]
+    window = runs[-1][3]
     if richardson:
         q2 = (sizes[1] / sizes[0]) ** 2
         rate = (q2 * rates[1] - rates[0]) / (q2 - 1)
-        err = abs(rate - rates[1])
+        err = max(abs(rate - rates[1]), window)
     else:
-        rate, err = rates[0], float("nan")
+        rate, err = rates[0], window
     res = runs[-1][1]
     return {"mode": i, "eigenvalue": lam1, "multiplicity": int(same.size),
             "measured_rate": float(rate), "relative_error": abs(rate - lam1) / abs(lam1),
             "rate_error": float(err),
-            "rates": [{"N": int(N), "rate": float(r[0]), "n_steps": int(r[1].n_steps)}
+            "rates": [{"N": int(N), "rate": float(r[0]), "window": float(r[3]),
+                       "n_steps": int(r[1].n_steps)}
                       for N, r in zip(sizes, runs, strict=True)],
-            "t_final": float(T), "amplitude": float(amplitude),
+            "t_final": float(T), "amplitude": float(amplitude), "symmetric": bool(symmetric),
             "success": all(bool(r[1].success) for r in runs),
             "n_steps": int(sum(r[1].n_steps for r in runs)),
             "_flow": (res, np.asarray(res.t), runs[-1][2])}
 
 
-def _decay_rate(fe, i, same, N, amplitude, T, tol, snapshots):
-    """The DAE's decay rate along eigenvector ``i`` on ``N`` finite-difference nodes."""
+def _shift(f, sigma):
+    """``f(s + sigma h)`` of periodic nodal values (Fourier interpolation; last axis)."""
+    n = f.shape[-1]
+    k = np.fft.rfftfreq(n, 1.0 / n)
+    return np.fft.irfft(np.fft.rfft(f) * np.exp(2j * np.pi * k * sigma / n), n)
+
+
+def _registration(x, y, X, Y, guess=0.0, reach=3):
+    """The parameter shift (in nodes) that best matches nodes ``(x, y)`` to ``(X, Y)``.
+
+    Minimises, over the shift ``sigma`` and a rigid motion, the sum of squared
+    distances between the shifted nodes and the reference ones (for each shift the
+    rigid motion is the closed-form Procrustes fit); integer shifts within ``reach`` of
+    ``guess`` bracket the minimum, which is then refined by Brent's method.
+    """
+    Z = (X - X.mean()) + 1j * (Y - Y.mean())
+
+    def cost(sigma):
+        xs, ys = _shift(np.vstack([x, y]), sigma)
+        a = (xs - xs.mean()) + 1j * (ys - ys.mean())
+        return float(np.sum(np.abs(a) ** 2) + np.sum(np.abs(Z) ** 2)
+                     - 2 * abs(np.vdot(a, Z)))
+
+    grid = np.round(guess) + np.arange(-reach, reach + 1)
+    best = grid[int(np.argmin([cost(g) for g in grid]))]
+    return float(minimize_scalar(cost, bracket=(best - 1, best, best + 1)).x)
+
+
+def _decay_rate(fe, i, same, N, amplitude, T, tol, snapshots, symmetric=True):
+    """The DAE's decay rate along eigenvector ``i`` on ``N`` finite-difference nodes.
+
+    Returns ``(rate, FlowResult of the + run, projected amplitude, window spread)``; the
+    result's ``n_steps`` counts the steps of both runs when ``symmetric``.
+    """
     sp = fe.spectrum
     grid = Fourier(N)
     c = fe.curve.on_grid(grid) if N != fe.N else fe.curve
@@ -238,20 +297,41 @@ def _decay_rate(fe, i, same, N, amplitude, T, tol, snapshots):
     x, y = c.positions()
     nx, ny = c.normal()
     d = amplitude / np.abs(phi).max()
-    x1, y1 = x + d * phi * nx, y + d * phi * ny
-    L1 = float(np.sum(np.hypot(np.roll(x1, -1) - x1, np.roll(y1, -1) - y1)))
     p = fe.params
-    model = CHA(eps=p["eps"], beta=p["beta"], rho=p["L_star"] / L1, A0=p["A0"],
-                l_star=p["l_star"], a=p["a"])
-    res = solve_flow(model, (x1, y1), T, N=N, tol=tol, method="bdf2",
-                     t_eval=np.linspace(0, T, snapshots), progress=False)
-    Vn = np.array([res.system.normal_velocity(s) for s in res.states])
+    t_eval = np.linspace(0, T, snapshots)
+
+    def run(sign):
+        x1, y1 = x + sign * d * phi * nx, y + sign * d * phi * ny
+        L1 = float(np.sum(np.hypot(np.roll(x1, -1) - x1, np.roll(y1, -1) - y1)))
+        model = CHA(eps=p["eps"], beta=p["beta"], rho=p["L_star"] / L1, A0=p["A0"],
+                    l_star=p["l_star"], a=p["a"])
+        res = solve_flow(model, (x1, y1), T, N=N, tol=tol, method="bdf2", t_eval=t_eval,
+                         progress=False)
+        V, shift = [], 0.0
+        for state in res.states:
+            shift = _registration(*res.system.positions(state), x, y, guess=shift)
+            V.append(_shift(res.system.normal_velocity(state), shift))
+        return res, np.array(V)
+
+    res, Vn = run(1.0)
+    if symmetric:
+        res_m, Vm = run(-1.0)
+        n = min(len(Vm), len(Vn))  # a failed run stops early: compare what both reached
+        Vn = 0.5 * (Vn[:n] - Vm[:n])
+        res = replace(res, n_steps=res.n_steps + res_m.n_steps,
+                      success=bool(res.success and res_m.success))
     basis = np.column_stack([vecs, rigid_normal_basis(c).T])
     coef = np.linalg.lstsq(basis, Vn.T, rcond=None)[0][: same.size]
     projected = np.linalg.norm(vecs @ coef, axis=0) / np.sqrt(N)
-    fit = slice(3, None)
-    rate = float(np.polyfit(res.t[fit], np.log(projected[fit]), 1)[0])
-    return rate, res, projected
+    t = t_eval[: projected.size]
+    fit = np.flatnonzero(t >= 1.0 / abs(float(sp.eigenvalues[i])))
+    if fit.size < 4:
+        fit = np.arange(max(0, t.size - 4), t.size)
+    logp = np.log(projected)
+    rate = float(np.polyfit(t[fit], logp[fit], 1)[0])
+    half = fit.size // 2
+    sub = [float(np.polyfit(t[f], logp[f], 1)[0]) for f in (fit[: half + 1], fit[half:])]
+    return rate, res, projected, abs(sub[1] - sub[0])
 
 
 def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded", tol=1e-10,
