@@ -42,8 +42,10 @@ from qsa.linalg.lu import permutation_parity
 
 __all__ = ["CapacitanceCore", "use_capacitance"]
 
-# the capacitance route is taken when Lyy holds at least this fraction of a dense block
-WIDE_DENSITY = 0.02
+# the capacitance route is taken when the rows of Lyy hold at least this many entries on
+# average (below it a sparse LU fills in little: measured on CHA states, SuperLU is the
+# faster at 40-80 entries per row and twice slower at 150-300, five times at ~1000)
+WIDE_ROW = 120
 # and at least this many nodes (below it SuperLU is fast whatever the fill)
 MIN_NODES = 400
 # a capacitance whose rcond is not above this is singular (SuperLU takes the system)
@@ -65,7 +67,7 @@ def use_capacitance(K, N) -> bool:
     bool
     """
     q = K.cY.shape[0]
-    return bool(q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_DENSITY * q * q)
+    return bool(q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_ROW * q)
 
 
 class CapacitanceCore:
