@@ -733,6 +733,12 @@ def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"
 
 
 # --------------------------------------------------------- Curve-level energy
+# The derivatives at the last curve asked for: an analysis asks for the gradient, the
+# Hessian and Hessian-vector products at one curve several times, and each set costs a
+# pass over all pairs. One entry, keyed by the kernel and the curve's arrays.
+_LAST_DERIVATIVES: dict = {}
+
+
 @dataclass(frozen=True)
 class Adhesion(Energy):
     """Two-point adhesion-repulsion energy of a :class:`~qsa.curve.Curve` (e:AdhE, e:LJ).
@@ -863,8 +869,15 @@ class Adhesion(Energy):
             ``.gradient()``, ``.hessian(form)``, ``.hessian_vector(v)``.
         """
         x, y = c.positions()
-        return adhesion_derivatives(self.kernel, c, adhesion_pairs(self.kernel, x, y,
-                                                                   method=self.method))
+        key = (self.kernel, self.method, type(c.grid).__name__, c.N, x.tobytes(), y.tobytes(),
+               np.asarray(c.kappa).tobytes(), np.asarray(c.g).tobytes())
+        hit = _LAST_DERIVATIVES.get(key)
+        if hit is None:
+            hit = adhesion_derivatives(self.kernel, c, adhesion_pairs(self.kernel, x, y,
+                                                                      method=self.method))
+            _LAST_DERIVATIVES.clear()
+            _LAST_DERIVATIVES[key] = hit
+        return hit
 
     def gradient(self, c) -> np.ndarray:
         """``nabla_I E_A`` in ``<f, h> = int f h dsigma``: the discrete energy's exact derivative.

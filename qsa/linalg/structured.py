@@ -209,6 +209,7 @@ class ReducedHessian:
             raise ValueError("ReducedHessian: U and V must have the same number of columns")
         self.U, self.V = U, V
         self._lu = None
+        self._rows = None  # row structure of a triangular cY, for _solve_cY_many
 
     # ----------------------------------------------------------------- shape
     @property
@@ -236,7 +237,7 @@ class ReducedHessian:
         args.update(changes)
         out = ReducedHessian(**args)
         if "cY" not in changes:
-            out._lu = self._lu  # same cY: share its factorization
+            out._lu, out._rows = self._lu, self._rows  # same cY: share its factorization
         return out
 
     # -------------------------------------------------------------- products
@@ -251,6 +252,47 @@ class ReducedHessian:
                 self._lu = spla.splu(cY)
         return self._lu.solve(np.asarray(b, dtype=float), trans=trans)
 
+    def _solve_cY_many(self, B, trans="N", overwrite=False):
+        """``cY^{-1} B`` (or ``cY^{-T} B``) for a dense ``B`` with many columns, C-ordered.
+
+        A triangular ``cY`` is solved by substitution row after row, each row a vector
+        operation over all the columns (several times faster than SuperLU's column
+        loop for a few thousand columns, and without its copies to Fortran order);
+        otherwise by its LU factors. ``overwrite`` lets a C-ordered float ``B`` be
+        overwritten by the solution.
+        """
+        if self._rows is None:
+            cY = sp.csr_matrix(self.cY)
+            lower = sp.triu(cY, 1).nnz == 0
+            if not lower:
+                self._rows = False
+            else:
+                rows = {}
+                for name, A in (("N", cY), ("T", sp.csr_matrix(cY.T))):
+                    A.sort_indices()
+                    ip, ix, dv = A.indptr, A.indices, A.data
+                    out = []
+                    for i in range(A.shape[0]):
+                        cols, vals = ix[ip[i]:ip[i + 1]], dv[ip[i]:ip[i + 1]]
+                        on = cols == i
+                        out.append((1.0 / vals[on][0], cols[~on], vals[~on]))
+                    rows[name] = out
+                self._rows = rows
+        if self._rows is False:
+            return np.ascontiguousarray(self._solve_cY(np.asfortranarray(B), trans=trans))
+        W = B if overwrite and B.dtype == float and B.flags.c_contiguous else \
+            np.array(B, dtype=float, order="C")
+        rows = self._rows[trans]
+        order = range(len(rows)) if trans == "N" else range(len(rows) - 1, -1, -1)
+        for i in order:
+            inv, cols, vals = rows[i]
+            if cols.size == 1:
+                W[i] -= vals[0] * W[cols[0]]
+            elif cols.size:
+                W[i] -= vals @ W[cols]
+            W[i] *= inv
+        return W
+
     def core_matvec(self, u):
         """``K u`` for the reduced Hessian ``K`` alone, ``u`` shape (p,) or (p, j)."""
         u = np.asarray(u, dtype=float)
@@ -258,7 +300,7 @@ class ReducedHessian:
         t = self.Luu @ u + self.Lyu.T @ z
         return t - self.cU.T @ self._solve_cY(self.Lyu @ u + self.Lyy @ z, trans="T")
 
-    def core_matmat(self, Q, block=512):
+    def core_matmat(self, Q, block=2048):
         """``K Q`` as a dense ``(p, k)`` array for a sparse ``Q`` with few entries per column.
 
         ``K Q`` by :meth:`core_matvec` costs ``nnz(Lyy) k`` (the products of the wide
@@ -291,16 +333,25 @@ class ReducedHessian:
         """
         Q = sp.csr_matrix(Q)
         p, m, k = self.Luu.shape[0], self.cY.shape[0], Q.shape[1]
-        cUQt = sp.csr_matrix((self.cU @ Q).T)                   # (k, m)
-        wide = sp.hstack([self.Lyy, self.Lyu], format="csc")    # (m, m + p)
+        cUQ = sp.csc_matrix(self.cU @ Q)
+        cUQt = sp.csr_matrix(cUQ.T)                             # (k, m)
+        both = sp.hstack([self.Lyy, self.Lyu], format="csc")    # (m, m + p)
         T1 = np.empty((m + p, k))                               # [Lyy Z Q; Lyu^T Z Q]
-        for start in range(0, m + p, block):
-            stop = min(m + p, start + block)
-            W = self._solve_cY(wide[:, start:stop].toarray(order="F"), trans="T")  # (m, b)
-            T1[start:stop] = -np.asarray(cUQt @ W).T
+        # rows of T1 whose column of [Lyy, Lyu] is short (the local parts of the state)
+        # are sparse rows times Z Q; only the wide ones go through cY^{-T}
+        counts = np.diff(both.indptr)
+        narrow = np.flatnonzero(counts <= max(64, k // 8))
+        wide = np.flatnonzero(counts > max(64, k // 8))
+        if narrow.size:
+            ZQ = self._solve_cY_many(cUQ.toarray(order="C"), overwrite=True)  # -Z Q, (m, k)
+            T1[narrow] = -np.asarray(sp.csr_matrix(both[:, narrow].T) @ ZQ)
+        for start in range(0, wide.size, block):
+            cols = wide[start:start + block]
+            W = self._solve_cY_many(both[:, cols].toarray(order="C"), trans="T", overwrite=True)
+            T1[cols] = -np.asarray(cUQt @ W).T
         ty = np.asarray((self.Lyu @ Q).toarray()) + T1[:m]
         return (np.asarray((self.Luu @ Q).toarray()) + T1[m:]
-                - self.cU.T @ self._solve_cY(ty, trans="T"))
+                - self.cU.T @ self._solve_cY_many(ty, trans="T", overwrite=True))
 
     def __matmul__(self, other):
         if isinstance(other, ReducedHessian):

@@ -20,11 +20,11 @@ solves with ``cY``); the third row of ``A`` makes ``psi = b_psi + G phi`` for ev
 solution, so ``F z = Q phi + Rk b_psi`` with the sparse ``Q = Rg gk + Rk G``; then
 (Woodbury) ::
 
-    (I + Gv K Q) phi = [A^{-1} (b_z - E V(b3 + Rk b_psi, b4, b5, b6))]_phi,
+    (I + [A^{-1} E K Q]_phi) phi = [A^{-1} (b_z - E V(b3 + Rk b_psi, b4, b5, b6))]_phi,
 
-``Gv = [A^{-1} E]_phi`` (``N`` transposed solves with ``A``) and ``K Q`` from
-:meth:`~qsa.linalg.ReducedHessian.core_matmat` (``O(q (q + p))`` work). The capacitance
-``T = I + Gv K Q`` is factored by LAPACK; one solve is two local sparse solves, two
+with ``K Q`` from :meth:`~qsa.linalg.ReducedHessian.core_matmat` (``O(q (q + p))``
+work) and ``N`` sparse solves with ``A``. The capacitance ``T = I + [A^{-1} E K Q]_phi``
+is factored by LAPACK; one solve is two local sparse solves, two
 applications of the implicit state (``O(nnz)``) and ``O(N^2)`` with the factors of ``T``.
 The elimination is exact in exact arithmetic; :class:`ShiftInvert` refines every solve
 against the residual of the whole sparse system, so its error estimates do not depend on
@@ -42,8 +42,10 @@ from qsa.linalg.lu import permutation_parity
 
 __all__ = ["CapacitanceCore", "use_capacitance"]
 
-# the capacitance route is taken when Lyy holds at least this fraction of a dense block
-WIDE_DENSITY = 0.02
+# the capacitance route is taken when the rows of Lyy hold at least this many entries on
+# average (below it a sparse LU fills in little: measured on CHA states, SuperLU is the
+# faster at 40-80 entries per row and twice slower at 150-300, five times at ~1000)
+WIDE_ROW = 120
 # and at least this many nodes (below it SuperLU is fast whatever the fill)
 MIN_NODES = 400
 # a capacitance whose rcond is not above this is singular (SuperLU takes the system)
@@ -65,7 +67,7 @@ def use_capacitance(K, N) -> bool:
     bool
     """
     q = K.cY.shape[0]
-    return bool(q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_DENSITY * q * q)
+    return bool(q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_ROW * q)
 
 
 class CapacitanceCore:
@@ -81,14 +83,14 @@ class CapacitanceCore:
         ``diag(g kappa)``.
     N : int
     block : int
-        Columns densified at a time while forming ``K Q`` and ``Gv``.
+        Columns densified at a time while forming ``K Q`` and the capacitance.
 
     Attributes
     ----------
     shape : tuple of int
         The core's shape, ``(3N + 2p + 2q,) * 2``.
     nnz : int
-        Stored entries of the factors (local LU, capacitance and ``Gv``).
+        Stored entries of the factors (local LU and capacitance).
     rcond : float
         LAPACK's estimate of the reciprocal 1-norm condition number of ``T``.
 
@@ -98,7 +100,7 @@ class CapacitanceCore:
         The local block or the capacitance is singular to working precision.
     """
 
-    def __init__(self, local, K, dgk, N, block=512):
+    def __init__(self, local, K, dgk, N, block=2048):
         self.N, self.K = N, K
         p, q = K.Luu.shape[0], K.cY.shape[0]
         self.p, self.q = p, q
@@ -116,15 +118,12 @@ class CapacitanceCore:
         self._E = sp.vstack([-(dgk @ Lg), -Lk, sp.csr_matrix((N, p))], format="csr")
         self._Q = sp.csr_matrix(Rg @ dgk + Rk @ G)
         KQ = K.core_matmat(self._Q, block=block)                  # (p, N)
-        Et = sp.csr_matrix(self._E.T)
-        Gv = np.empty((N, p))
+        T = np.empty((N, N))                                      # [A^{-1} E K Q]_phi
         for start in range(0, N, block):
             stop = min(N, start + block)
-            rhs = np.zeros((3 * N, stop - start), order="F")  # SuperLU solves columns
-            rhs[np.arange(start, stop), np.arange(stop - start)] = 1.0
-            Gv[start:stop] = np.asarray(Et @ self._A.solve(rhs, trans="T")).T
-        self._Gv = Gv
-        T = Gv @ KQ
+            EKQ = np.asfortranarray(self._E @ KQ[:, start:stop])  # SuperLU solves columns
+            T[:, start:stop] = self._A.solve(EKQ)[:N]
+        del KQ
         T[np.diag_indices(N)] += 1.0
         if not np.all(np.isfinite(T)):
             raise np.linalg.LinAlgError("the capacitance has non-finite entries")
@@ -135,7 +134,7 @@ class CapacitanceCore:
         self.rcond = float(rcond)
         if info != 0 or not self.rcond > MIN_RCOND:
             raise np.linalg.LinAlgError(f"ill-conditioned capacitance (rcond {self.rcond:.2e})")
-        self.nnz = int(self._A.L.nnz + self._A.U.nnz + N * N + N * p)
+        self.nnz = int(self._A.L.nnz + self._A.U.nnz + N * N)
 
     def _state(self, u, b4, b5, b6):
         """``(v, y, mu)`` of the last four block rows for given ``u``."""

@@ -31,12 +31,12 @@ def _operator(N, l_star):
 def forced(monkeypatch):
     """Take the capacitance route whatever the size and width."""
     monkeypatch.setattr(cap, "MIN_NODES", 0)
-    monkeypatch.setattr(cap, "WIDE_DENSITY", 0.0)
+    monkeypatch.setattr(cap, "WIDE_ROW", 0)
 
 
 @pytest.fixture
 def never(monkeypatch):
-    monkeypatch.setattr(cap, "WIDE_DENSITY", np.inf)
+    monkeypatch.setattr(cap, "WIDE_ROW", np.inf)
 
 
 def test_core_matmat_is_core_matvec_of_the_dense_columns():
@@ -67,9 +67,9 @@ def test_eigenpairs_agree_between_the_two_core_solvers(monkeypatch):
     c, op = _operator(440, 0.1)
     rigid = op.ritz(rigid_normal_basis(c))[0]
     out = {}
-    for route, (nodes, width) in {"superlu": (10**9, np.inf), "capacitance": (0, 0.0)}.items():
+    for route, (nodes, width) in {"superlu": (10**9, np.inf), "capacitance": (0, 0)}.items():
         monkeypatch.setattr(cap, "MIN_NODES", nodes)
-        monkeypatch.setattr(cap, "WIDE_DENSITY", width)
+        monkeypatch.setattr(cap, "WIDE_ROW", width)
         assert op.shift_invert(0.0).core_solver == route
         out[route] = certified_eigenpairs(op, np.zeros((0, c.N)), k=8, sigma=0.0, rigid=rigid)
     a, b = out["superlu"], out["capacitance"]
@@ -81,7 +81,7 @@ def test_eigenpairs_agree_between_the_two_core_solvers(monkeypatch):
 
 def test_route_follows_the_width_of_the_two_point_blocks():
     _, narrow = _operator(cap.MIN_NODES, 0.01)
-    _, wide = _operator(cap.MIN_NODES, 0.1)
+    _, wide = _operator(cap.MIN_NODES, 0.15)
     assert not cap.use_capacitance(narrow.reduced, narrow.N)
     assert cap.use_capacitance(wide.reduced, wide.N)
     assert narrow.shift_invert(0.0).core_solver == "superlu"
