@@ -93,6 +93,10 @@ class CapacitanceCore:
         Stored entries of the factors (local LU and capacitance).
     rcond : float
         LAPACK's estimate of the reciprocal 1-norm condition number of ``T``.
+    phi_only : bool
+        While True, :meth:`solve` returns only ``phi`` and ``psi`` (the rest zero),
+        skipping the second pass over the implicit state: enough for an unrefined
+        solve of the bordered system, whose border reads only those rows.
 
     Raises
     ------
@@ -113,6 +117,8 @@ class CapacitanceCore:
         Lk, Lg = K.left[:N], K.left[N:]
         Rk, Rg = K.right[:, :N], K.right[:, N:]
         G = sp.csr_matrix(local[2][0]) * -1.0  # the third block row is [-G, I, 0]
+        self._G = G
+        self.phi_only = False
         self._Rk = sp.csr_matrix(Rk)
         self._LyuT, self._cUT = sp.csr_matrix(K.Lyu.T), sp.csr_matrix(K.cU.T)
         self._E = sp.vstack([-(dgk @ Lg), -Lk, sp.csr_matrix((N, p))], format="csr")
@@ -156,6 +162,11 @@ class CapacitanceCore:
         else:  # v0 = 0 (a right-hand side in the phi rows only)
             z0 = self._A.solve(bz)
         phi = sla.lu_solve(self._T, z0[:N], check_finite=False)
+        if self.phi_only:  # phi and psi = b_psi + G phi exact, the other unknowns left 0
+            out = np.zeros_like(b)
+            out[:N] = phi
+            out[N:2 * N] = bz[2 * N:] + self._G @ phi
+            return out
         u = u0 + self._Q @ phi
         v, y, mu = self._state(u, b4, b5, b6)
         z = self._A.solve(bz - self._E @ v)

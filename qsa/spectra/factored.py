@@ -480,6 +480,7 @@ class ShiftInvert:
         D[:r, :r] = np.eye(r)
         self._B1, self._B2, self._D = B1, B2, D
         self._lu = None
+        self._capacitance = None
         self.core_solver = "dense" if not sparse else "superlu"
         if sparse and op.reduced is not None and use_capacitance(op.reduced, N):
             try:
@@ -488,6 +489,7 @@ class ShiftInvert:
                 pass  # a singular local block or capacitance: the whole system by SuperLU
             else:
                 self._lu = Factorization.from_solver(cap, B1, B2, D)
+                self._capacitance = cap
                 self.core_solver = "capacitance"
         if self._lu is None:
             self._lu = factorize(core, B1, B2, D)
@@ -560,6 +562,13 @@ class ShiftInvert:
         b = np.asarray(b, dtype=float)
         rhs = np.zeros((self._core.shape[0] + p,) + b.shape[1:])
         rhs[:N] = b
+        if refine == 0 and not estimate and self._capacitance is not None:
+            # phi alone is wanted, and the border reads only the phi and psi rows
+            self._capacitance.phi_only = True
+            try:
+                return lu.solve(rhs)[:N]
+            finally:
+                self._capacitance.phi_only = False
         x = lu.solve(rhs)
         residual = self._residual if self._needs_extended(lu, p) else self._residual_double
         for _ in range(refine):

@@ -86,3 +86,15 @@ def test_route_follows_the_width_of_the_two_point_blocks():
     assert cap.use_capacitance(wide.reduced, wide.N)
     assert narrow.shift_invert(0.0).core_solver == "superlu"
     assert wide.shift_invert(0.0).core_solver == "capacitance"
+
+
+def test_unrefined_solve_returns_phi_of_the_refined_one(forced):
+    c, op = _operator(200, 0.1)
+    R = np.linalg.qr((rigid_normal_basis(c) * np.sqrt(c.dsigma)).T)[0].T / np.sqrt(c.dsigma)
+    si = ShiftInvert(op, 0.5, deflate=R)
+    b = c.dsigma * np.cos(2 * np.pi * 3 * c.grid.s)
+    fine = si.solve(b)
+    quick = si.solve(b, refine=0)  # phi and psi only, through the border
+    assert np.linalg.norm(quick - fine) <= 1e-7 * np.linalg.norm(fine)
+    assert not si._capacitance.phi_only
+    assert np.abs(R @ (c.dsigma * quick)).max() <= 1e-8 * np.abs(quick).max()
