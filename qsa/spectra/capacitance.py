@@ -44,7 +44,7 @@ __all__ = ["CapacitanceCore", "use_capacitance"]
 
 # the capacitance route is taken when the rows of Lyy hold at least this many entries on
 # average (below it a sparse LU fills in little: measured on CHA states, SuperLU is the
-# faster at 40-80 entries per row and twice slower at 150-300, five times at ~1000)
+# faster at 40-80 entries per row, 1.5-2.5 times slower at 150-300, six times at ~1200)
 WIDE_ROW = 120
 # and at least this many nodes (below it SuperLU is fast whatever the fill)
 MIN_NODES = 400
