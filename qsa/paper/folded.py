@@ -324,6 +324,8 @@ def _decay_rate(fe, i, same, N, amplitude, T, tol, snapshots, symmetric=True):
     coef = np.linalg.lstsq(basis, Vn.T, rcond=None)[0][: same.size]
     projected = np.linalg.norm(vecs @ coef, axis=0) / np.sqrt(N)
     t = t_eval[: projected.size]
+    if t.size < 4:  # a run stopped before the fit window: no rate
+        return float("nan"), replace(res, success=False), projected, float("nan")
     fit = np.flatnonzero(t >= 1.0 / abs(float(sp.eigenvalues[i])))
     if fit.size < 4:
         fit = np.arange(max(0, t.size - 4), t.size)
