@@ -323,11 +323,22 @@ def _reduced_rounding(K, psi):
     z = -K._solve_cY(K.cU @ u)
     zl = -K._solve_cY(K.cU @ l)
     al, au, az, azl = np.abs(l), np.abs(u), np.abs(z), np.abs(zl)
-    out = (np.sum(al * (abs(K.Luu) @ au), axis=0) + np.sum(al * (abs(K.Lyu.T) @ az), axis=0)
-           + np.sum(azl * (abs(K.Lyu) @ au), axis=0) + np.sum(azl * (abs(K.Lyy) @ az), axis=0))
+    Auu, AyuT, Ayu, Ayy, Ar, AlT = _abs_factors(K)
+    out = (np.sum(al * (Auu @ au), axis=0) + np.sum(al * (AyuT @ az), axis=0)
+           + np.sum(azl * (Ayu @ au), axis=0) + np.sum(azl * (Ayy @ az), axis=0))
     apsi = np.abs(psi)
-    return (out + np.sum(np.abs(K.core_matvec(l)) * (abs(K.right) @ apsi), axis=0)
-            + np.sum(np.abs(K.core_matvec(u)) * (abs(K.left.T) @ apsi), axis=0))
+    return (out + np.sum(np.abs(K.core_matvec(l)) * (Ar @ apsi), axis=0)
+            + np.sum(np.abs(K.core_matvec(u)) * (AlT @ apsi), axis=0))
+
+
+def _abs_factors(K):
+    """``|Luu|, |Lyu^T|, |Lyu|, |Lyy|, |Rf|, |Lf^T|`` of ``K`` (CSR), computed once per ``K``."""
+    cached = getattr(K, "_abs_factors", None)
+    if cached is None:
+        cached = tuple(sp.csr_matrix(abs(A)) for A in (K.Luu, K.Lyu.T, K.Lyu, K.Lyy, K.right,
+                                                         K.left.T))
+        K._abs_factors = cached
+    return cached
 
 
 @dataclass(frozen=True)
