@@ -185,8 +185,8 @@ def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=3.0
     finite-difference error, ``O(h^2)``. With ``richardson`` the flow runs on
     ``N1 = fe.N`` and ``N2 = 2 N1 - 1`` nodes (the state and the eigenspace resampled
     spectrally) and the rate is extrapolated, ``r = (q^2 r2 - r1) / (q^2 - 1)`` with
-    ``q = N2 / N1``; ``rate_error`` is the larger of ``|r - r2|`` and the finer grid's
-    window spread.
+    ``q = N2 / N1``; ``rate_error`` is ``|r - r2|`` plus the finer grid's window
+    spread.
 
     Parameters
     ----------
@@ -237,7 +237,7 @@ def relaxation_rate(fe: FoldedEquilibrium, mode=None, amplitude=1e-3, efolds=3.0
     if richardson:
         q2 = (sizes[1] / sizes[0]) ** 2
         rate = (q2 * rates[1] - rates[0]) / (q2 - 1)
-        err = max(abs(rate - rates[1]), window)
+        err = abs(rate - rates[1]) + window
     else:
         rate, err = rates[0], window
     res = runs[-1][1]

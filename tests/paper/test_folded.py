@@ -39,6 +39,8 @@ def test_polish_spectrum_and_flow_rate(fe):
     assert fe.rate["success"]
     assert fe.rate["eigenvalue"] == max(v for v in sp.eigenvalues[~sp.is_kernel] if v < 0)
     assert fe.rate["relative_error"] <= 0.01
+    # the error estimate (extrapolation + fit window) covers the measured difference
+    assert abs(fe.rate["measured_rate"] - fe.rate["eigenvalue"]) <= fe.rate["rate_error"]
     s = json.loads(json.dumps(fe.summary()))
     assert s["n_kernel"] == 3 and s["rate"]["relative_error"] <= 0.01
     assert s["params"]["L_star"] == pytest.approx(REF["L_star"], rel=1e-14)
