@@ -117,6 +117,12 @@ def _initial_dt(system, x, G, F):
     return 0.01 * size / rate if rate > 0 else 1.0
 
 
+#: The flow stops (unsuccessfully) once rejections have cut the step below this fraction
+#: of the first one: from there no step of the flow is accepted (e.g. every step would
+#: make the curve touch itself).
+MIN_DT_RATIO = 1e-12
+
+
 def pseudo_transient(system, x0, solve, *, tol=1e-10, maxiter=400, newton_maxiter=12,
                      attempt_gain=0.7, energy=None, dt0=None, check_curve=True,
                      line_search=True) -> TransientRun:
@@ -154,7 +160,8 @@ def pseudo_transient(system, x0, solve, *, tol=1e-10, maxiter=400, newton_maxite
     -------
     TransientRun
         ``success`` when a Newton solve from the flow converged (its state is
-        ``newton.x``); never raises for non-convergence.
+        ``newton.x``); never raises for non-convergence. The flow also stops when
+        rejected steps have cut the step below :data:`MIN_DT_RATIO` of the first.
     """
     x = np.array(x0, dtype=float)
     N = system.N
@@ -164,6 +171,7 @@ def pseudo_transient(system, x0, solve, *, tol=1e-10, maxiter=400, newton_maxite
     history, dts = [r], []
     best = (r, x.copy())
     dt = None if dt0 is None else float(dt0)
+    first_dt = None
     n_steps = n_rejected = n_lu = 0
     time = 0.0
     last_try = r
@@ -174,6 +182,10 @@ def pseudo_transient(system, x0, solve, *, tol=1e-10, maxiter=400, newton_maxite
             c = system.curve(x)
             G = laplace_s(c) + system.grid.diag(c.kappa ** 2)
             dt = _initial_dt(system, x, G, F)
+        if first_dt is None:
+            first_dt = dt
+        if not dt > MIN_DT_RATIO * first_dt:  # every step from here rejected: stalled
+            break
         M, G = _flow_matrix(system, x, J, dt)
         b = np.zeros(M.shape[0])
         b[:F.size] = F

@@ -80,3 +80,19 @@ def test_pseudo_transient_record():
     # nothing to do at a solution: no flow step, no Newton solve tried
     done = pseudo_transient(S, run.newton.x, newton_solve, tol=1e-6, maxiter=0)
     assert done.n_steps == 0 and done.newton is None and not done.success
+
+
+def test_pseudo_transient_stops_when_every_step_is_rejected():
+    """Rejections shrink the step by 4 each; the flow stops instead of dividing by 0."""
+    c = equal_arclength(square_guess(Fourier(65)))
+
+    class Stuck(EquilibriumSystem):
+        def scaled_norm(self, F, curve, scale):  # every trial state looks far worse
+            r = super().scaled_norm(F, curve, scale)
+            self.calls = getattr(self, "calls", 0) + 1
+            return r if self.calls == 1 else 1e300
+
+    S = Stuck(E, c)
+    run = pseudo_transient(S, S.pack(c), newton_solve, tol=1e-10, maxiter=10**6)
+    assert not run.success and run.n_steps == 0 and run.newton is None
+    assert 0 < run.n_rejected < 30   # 4^-20 < 1e-12: stopped after about 20 rejections
