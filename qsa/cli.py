@@ -10,8 +10,8 @@ summary on stdout) and, where it draws, ``--plot FILE.png``.
 (:func:`qsa.commands._options.check_paths`) and turns what the subcommand
 raises into one line on stderr and an exit code
 (:func:`qsa.commands._errors.run_command`: 0 done, 1 failure reported, 2 bad
-input, 130 interrupted, 141 output pipe closed), so every subcommand gets the
-same behaviour without code of its own.
+input, 70 internal error, 130 interrupted, 141 output pipe closed), so every
+subcommand gets the same behaviour without code of its own.
 """
 
 from __future__ import annotations

@@ -31,13 +31,14 @@ import os
 import sys
 import textwrap
 
-__all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_INTERRUPTED",
+__all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED",
            "EXIT_BROKEN_PIPE", "EXIT_CODES", "epilog", "run_command", "warn", "note",
            "silence_stdout"]
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 70
 EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 
@@ -49,6 +50,8 @@ EXIT_CODES = {
     EXIT_BAD_INPUT: "bad input, one line on stderr: invalid value, unreadable input file, "
                     "output that cannot be written (checked before any work), not enough "
                     "memory for the run",
+    EXIT_INTERNAL: "an internal error (a bug in qsa): one line on stderr naming it; "
+                   "QSA_TRACEBACK=1 in the environment shows the traceback",
     EXIT_INTERRUPTED: "interrupted (Ctrl-C); a flow saves its checkpoint and prints the "
                       "--resume that continues it",
     EXIT_BROKEN_PIPE: "the output pipe was closed (e.g. | head): quiet exit",
@@ -130,8 +133,9 @@ def run_command(func, args) -> int:
     int
         ``func``'s own code (0 or 1), or 2 (``ValueError``, ``OSError``,
         ``MemoryError``), 130 (``KeyboardInterrupt``; a
-        :class:`qsa.flows.FlowInterrupted` adds its checkpoint) or 141
-        (``BrokenPipeError``).
+        :class:`qsa.flows.FlowInterrupted` adds its checkpoint), 141
+        (``BrokenPipeError``) or 70 (any other exception: a bug, reported in one line
+        unless ``QSA_TRACEBACK`` is set, when it is raised).
     """
     try:
         code = int(func(args) or 0)
@@ -164,3 +168,14 @@ def run_command(func, args) -> int:
     except OSError as exc:
         _error(args, _oserror_text(exc))
         return EXIT_BAD_INPUT
+    except Exception as exc:
+        if os.environ.get("QSA_TRACEBACK"):
+            raise
+        where = exc.__traceback__
+        while where is not None and where.tb_next is not None:
+            where = where.tb_next
+        at = "" if where is None else \
+            f" at {os.path.basename(where.tb_frame.f_code.co_filename)}:{where.tb_lineno}"
+        _error(args, f"internal error: {type(exc).__name__}: {exc}{at} (a bug in qsa; "
+                     "QSA_TRACEBACK=1 shows the traceback)")
+        return EXIT_INTERNAL

@@ -59,7 +59,7 @@ class CommandParser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs):
         if kwargs.get("epilog") is None:
             kwargs["epilog"] = ("exit codes: 0 done, 1 failure reported, 2 bad input, "
-                                "130 interrupted (see qsa --help)")
+                                "70 internal error, 130 interrupted (see qsa --help)")
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = _NEGATIVE_NUMBER
         self.set_defaults(qsa_prog=self.prog)

@@ -370,3 +370,22 @@ def test_memory_estimate_refuses_a_moderate_run_under_a_small_limit(monkeypatch,
                        "--N", "1001")
     assert code == 2
     assert_one_error_line(err, "the spectrum at N = 1001", "--k K")
+
+
+def test_an_internal_error_is_one_line_and_exit_70(capsys, monkeypatch):
+    import argparse
+
+    from qsa.commands._errors import EXIT_INTERNAL, run_command
+
+    def broken(args):
+        return 1 / 0
+
+    args = argparse.Namespace(qsa_prog="qsa test")
+    monkeypatch.delenv("QSA_TRACEBACK", raising=False)
+    assert run_command(broken, args) == EXIT_INTERNAL == 70
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("qsa test: error: internal error: ")
+    assert "ZeroDivisionError" in err and "QSA_TRACEBACK=1" in err
+    monkeypatch.setenv("QSA_TRACEBACK", "1")
+    with pytest.raises(ZeroDivisionError):
+        run_command(broken, args)
