@@ -135,10 +135,8 @@ def _polish(si, V):
     result makes the eigenvalue error second order in what is left.
     """
     w = si.op.w
-    X = si.solve(w[:, None] * V)
-    G = X.T @ (w[:, None] * X)
-    L = np.linalg.cholesky(0.5 * (G + G.T))
-    X = sla.solve_triangular(L, X.T, lower=True).T          # <.,.>-orthonormal columns
+    rw = np.sqrt(w)[:, None]
+    X = np.linalg.qr(rw * si.solve(w[:, None] * V))[0] / rw  # <.,.>-orthonormal columns
     Kc = X.T @ (w[:, None] * si.solve(w[:, None] * X))
     nu, Y = np.linalg.eigh(0.5 * (Kc + Kc.T))
     keep = nu != 0
