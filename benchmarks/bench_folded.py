@@ -9,7 +9,8 @@ physical; it needs N >= 1000 on finite differences). Cases: neighbour lists at T
 T1's l* on finite differences, N = 1200 ... 10^4, and the long-range l* = 0.5 (all
 pairs) at N = 1000 ... 1400. Per N: interacting pairs, wall time of
 ``spectrum(E, c, k=20, sigma=0)`` (assembly, factorization, Arnoldi) and peak traced
-memory; then the fitted exponent of time against N.
+memory; then the fitted exponent of time against N. A size whose pairs would need more
+than 80% of the available memory is skipped with a message.
 
 Timings are wall-clock, single-threaded BLAS, noisy on a shared machine.
 
@@ -26,6 +27,7 @@ import warnings
 import numpy as np
 
 from qsa import Curve, FiniteDifference, io
+from qsa.commands._memory import available_bytes, format_bytes
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.energies.adhesion import adhesion_pairs
 from qsa.paper.scenarios import CHAScenario
@@ -47,12 +49,22 @@ def energy_of(scenario, L0, method):
             + Adhesion(scenario.A0, scenario.l_star, scenario.a, method=method))
 
 
+# peak memory per interacting pair of the whole measurement (Hessian, implicit-state
+# system, its extended-precision copy, capacitance): ~1.6 kB measured at N = 2400 and 4800
+BYTES_PER_PAIR = 1.7e3
+
+
 def measure(scenario, N, method, source):
     c = state(scenario, N, source)
     L0 = Curve.from_positions(*scenario.initial(N), FiniteDifference(N)).length()
     E = energy_of(scenario, L0, method)
     x, y = c.positions()
     P = adhesion_pairs(E.terms()[-1].kernel, x, y, method=method)[0].size
+    need, have = BYTES_PER_PAIR * P, available_bytes()
+    if need > 0.8 * have:
+        print(f"N = {N}: skipped, {P} pairs need about {format_bytes(need)} "
+              f"(available {format_bytes(have)})")
+        return None
     tracemalloc.start()
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -66,6 +78,7 @@ def measure(scenario, N, method, source):
 
 
 def report(title, rows):
+    rows = [r for r in rows if r is not None]
     print(f"\n{title}")
     print(f"{'N':>7} {'pairs':>10} {'time s':>9} {'peak MB':>9} {'eigs':>5} {'min|lam|':>10}")
     for r in rows:
