@@ -210,6 +210,7 @@ class ReducedHessian:
         self.U, self.V = U, V
         self._lu = None
         self._rows = None  # row structure of a triangular cY, for _solve_cY_many
+        self._transposes = None  # CSR Lyu^T and cU^T, for implicit_state
 
     # ----------------------------------------------------------------- shape
     @property
@@ -295,10 +296,28 @@ class ReducedHessian:
 
     def core_matvec(self, u):
         """``K u`` for the reduced Hessian ``K`` alone, ``u`` shape (p,) or (p, j)."""
-        u = np.asarray(u, dtype=float)
-        z = -self._solve_cY(self.cU @ u)                         # Z u
-        t = self.Luu @ u + self.Lyu.T @ z
-        return t - self.cU.T @ self._solve_cY(self.Lyu @ u + self.Lyy @ z, trans="T")
+        return self.implicit_state(np.asarray(u, dtype=float))[0]
+
+    def implicit_state(self, u, b4=0.0, b5=0.0, b6=0.0):
+        """``(v, y, mu)`` with ``cU u + cY y = b6``, ``Lyu u + Lyy y + cY^T mu = b5`` and
+        ``v = Luu u + Lyu^T y + cU^T mu - b4`` (``v = K u`` when the ``b`` are zero).
+
+        Parameters
+        ----------
+        u : ndarray, shape (p,) or (p, j)
+        b4, b5, b6 : ndarray or float
+            Right-hand sides of the ``v``, adjoint and state rows.
+
+        Returns
+        -------
+        tuple of ndarray
+        """
+        if self._transposes is None:
+            self._transposes = (sp.csr_matrix(self.Lyu.T), sp.csr_matrix(self.cU.T))
+        LyuT, cUT = self._transposes
+        y = self._solve_cY(b6 - self.cU @ u)
+        mu = self._solve_cY(b5 - self.Lyu @ u - self.Lyy @ y, trans="T")
+        return self.Luu @ u + LyuT @ y + cUT @ mu - b4, y, mu
 
     def core_matmat(self, Q, block=2048):
         """``K Q`` as a dense ``(p, k)`` array for a sparse ``Q`` with few entries per column.
@@ -339,9 +358,8 @@ class ReducedHessian:
         T1 = np.empty((m + p, k))                               # [Lyy Z Q; Lyu^T Z Q]
         # rows of T1 whose column of [Lyy, Lyu] is short (the local parts of the state)
         # are sparse rows times Z Q; only the wide ones go through cY^{-T}
-        counts = np.diff(both.indptr)
-        narrow = np.flatnonzero(counts <= max(64, k // 8))
-        wide = np.flatnonzero(counts > max(64, k // 8))
+        short = np.diff(both.indptr) <= max(64, k // 8)
+        narrow, wide = np.flatnonzero(short), np.flatnonzero(~short)
         if narrow.size:
             ZQ = self._solve_cY_many(cUQ.toarray(order="C"), overwrite=True)  # -Z Q, (m, k)
             T1[narrow] = -np.asarray(sp.csr_matrix(both[:, narrow].T) @ ZQ)

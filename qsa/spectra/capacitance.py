@@ -36,9 +36,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from qsa.linalg.lu import permutation_parity
+from qsa.linalg.lu import _lapack_sign, factorize
 
 __all__ = ["CapacitanceCore", "use_capacitance"]
 
@@ -109,18 +108,13 @@ class CapacitanceCore:
         p, q = K.Luu.shape[0], K.cY.shape[0]
         self.p, self.q = p, q
         self.shape = (3 * N + 2 * p + 2 * q,) * 2
-        A = sp.bmat(local, format="csc")
-        try:
-            self._A = spla.splu(A)
-        except RuntimeError as exc:
-            raise np.linalg.LinAlgError(f"singular local block: {exc}") from None
+        self._A = factorize(sp.bmat(local, format="csc"))
         Lk, Lg = K.left[:N], K.left[N:]
         Rk, Rg = K.right[:, :N], K.right[:, N:]
         G = sp.csr_matrix(local[2][0]) * -1.0  # the third block row is [-G, I, 0]
         self._G = G
         self.phi_only = False
         self._Rk = sp.csr_matrix(Rk)
-        self._LyuT, self._cUT = sp.csr_matrix(K.Lyu.T), sp.csr_matrix(K.cU.T)
         self._E = sp.vstack([-(dgk @ Lg), -Lk, sp.csr_matrix((N, p))], format="csr")
         self._Q = sp.csr_matrix(Rg @ dgk + Rk @ G)
         KQ = K.core_matmat(self._Q, block=block)                  # (p, N)
@@ -140,15 +134,7 @@ class CapacitanceCore:
         self.rcond = float(rcond)
         if info != 0 or not self.rcond > MIN_RCOND:
             raise np.linalg.LinAlgError(f"ill-conditioned capacitance (rcond {self.rcond:.2e})")
-        self.nnz = int(self._A.L.nnz + self._A.U.nnz + N * N)
-
-    def _state(self, u, b4, b5, b6):
-        """``(v, y, mu)`` of the last four block rows for given ``u``."""
-        K = self.K
-        y = K._solve_cY(b6 - K.cU @ u)
-        mu = K._solve_cY(b5 - K.Lyu @ u - K.Lyy @ y, trans="T")
-        v = K.Luu @ u + self._LyuT @ y + self._cUT @ mu - b4
-        return v, y, mu
+        self.nnz = int(self._A.nnz + N * N)
 
     def solve(self, b):
         """``x`` with ``core x = b``; ``b`` of shape (n,) or (n, k)."""
@@ -158,7 +144,7 @@ class CapacitanceCore:
         bz, b3, b4, b5, b6 = np.split(b, cuts, axis=0)
         u0 = b3 + self._Rk @ bz[2 * N:]  # psi = b_psi + G phi, b_psi in the third rows
         if np.any(u0) or np.any(b4) or np.any(b5) or np.any(b6):
-            z0 = self._A.solve(bz - self._E @ self._state(u0, b4, b5, b6)[0])
+            z0 = self._A.solve(bz - self._E @ self.K.implicit_state(u0, b4, b5, b6)[0])
         else:  # v0 = 0 (a right-hand side in the phi rows only)
             z0 = self._A.solve(bz)
         phi = sla.lu_solve(self._T, z0[:N], check_finite=False)
@@ -168,15 +154,10 @@ class CapacitanceCore:
             out[N:2 * N] = bz[2 * N:] + self._G @ phi
             return out
         u = u0 + self._Q @ phi
-        v, y, mu = self._state(u, b4, b5, b6)
+        v, y, mu = self.K.implicit_state(u, b4, b5, b6)
         z = self._A.solve(bz - self._E @ v)
         return np.concatenate([z, u, v, y, mu], axis=0)
 
     def det_sign(self) -> int:
         """Sign of the determinant of the core, ``(-1)^(p + q) sign(det A) sign(det T)``."""
-        lu = self._A
-        s = int(np.prod(np.sign(lu.U.diagonal())))
-        s *= permutation_parity(lu.perm_r) * permutation_parity(lu.perm_c)
-        tl, piv = self._T
-        s *= int(np.prod(np.sign(np.diag(tl)))) * (-1) ** int(np.sum(piv != np.arange(piv.size)))
-        return s * (-1) ** (self.p + self.q)
+        return self._A.det_sign() * _lapack_sign(*self._T) * (-1) ** (self.p + self.q)
