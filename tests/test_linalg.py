@@ -5,6 +5,7 @@ import pytest
 import scipy.sparse as sp
 
 from qsa.linalg import (
+    BlockSparse,
     LowRankUpdate,
     ReducedHessian,
     SparsePlusLowRank,
@@ -83,6 +84,41 @@ def test_sum_on_the_same_scaling_stacks_the_states():
     assert total.augmented(0.0).shape[0] == 7 + 2 * 9
     b = np.linspace(-1, 1, 7)
     assert np.allclose((D + D2 - 0.2 * np.eye(7)) @ (total.shift_invert(0.2) @ b), b)
+
+
+def test_transposes_and_factors_are_shared_only_with_the_same_core():
+    """Matrices made from one another share what is derived from the core, never a stale one."""
+    H, D = random_reduced(3)
+    x = np.linspace(0.0, 1.0, 7)
+    assert np.allclose(H @ x, D @ x)  # forms the transposes and the factors of cY
+    for G in (H.T, 2.0 * H, H @ sp.identity(7, format="csr")):
+        assert G._core is H._core
+    other, D2 = random_reduced(4)
+    total = H + other  # a new core (stacked states): its own cache
+    assert total._core is not H._core
+    assert np.allclose(total @ x, (D + D2) @ x)
+    assert np.allclose(total.T @ x, (D + D2).T @ x)
+    Auu, AyuT, Ayu, Ayy = H.abs_core()
+    assert np.allclose(Ayu.toarray(), np.abs(H.Lyu.toarray()))
+    assert np.allclose(AyuT.toarray(), np.abs(H.Lyu.toarray()).T)
+
+
+@pytest.mark.parametrize("dtype", [float, np.longdouble])
+def test_block_sparse_products_equal_the_assembled_matrix(dtype):
+    rng = np.random.default_rng(5)
+    blk = lambda m, n, fmt: sp.random(m, n, density=0.4, random_state=rng, format=fmt)
+    blocks = [[blk(3, 4, "csr"), None, blk(3, 2, "coo")],
+              [None, blk(5, 5, "csc"), None],
+              [blk(2, 4, "csr"), blk(2, 5, "csr"), sp.identity(2)]]
+    B = BlockSparse(blocks).astype(dtype)
+    A = sp.bmat(blocks).toarray()
+    assert B.shape == A.shape == (10, 11) and B.tocsr().shape == B.tocsc().shape == A.shape
+    assert np.allclose(B.tocsc().toarray(), A)
+    X = rng.standard_normal((11, 3)).astype(dtype)
+    assert (B @ X).dtype == np.dtype(dtype) and (B @ X[:, 0]).shape == (10,)
+    assert np.allclose((B @ X).astype(float), A @ X.astype(float))
+    with pytest.raises(ValueError, match="every block row and column"):
+        BlockSparse([[sp.identity(2), None], [None, None]])
 
 
 @pytest.mark.parametrize("low_rank", [0, 2])

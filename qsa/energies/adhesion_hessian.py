@@ -195,6 +195,44 @@ class _Entries:
         return sp.coo_matrix((vals, (rows, cols)), shape=shape).tocsr()
 
 
+class _PairPattern:
+    """The CSR pattern ``(i, j), (j, i), (n, n)`` of the pairs, shared by the Hessian's blocks.
+
+    Every ``N x N`` block of the reduced Hessian has entries at the pairs, their mirror
+    images and the diagonal: the sorting into CSR order is done once and each block's
+    values are gathered into it (no COO assembly per block).
+    """
+
+    def __init__(self, i, j, N):
+        n = np.arange(N, dtype=np.int32)
+        rows, cols = np.concatenate([i, j, n]), np.concatenate([j, i, n])
+        self.order = np.lexsort((cols, rows))
+        self.indices = cols[self.order].astype(np.int32)
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=N))]).astype(
+            np.int32 if rows.size < 2**31 else np.int64)
+        self.N = N
+
+    def csr(self, upper, lower, diagonal, column_scale=None):
+        """The block with ``upper`` at ``(i, j)``, ``lower`` at ``(j, i)``, ``diagonal``."""
+        N = self.N
+        vals = np.concatenate([np.broadcast_to(upper, (self.order.size - N) // 2),
+                               np.broadcast_to(lower, (self.order.size - N) // 2),
+                               np.broadcast_to(diagonal, N)])[self.order]
+        if column_scale is not None:
+            vals *= column_scale[self.indices]
+        return sp.csr_matrix((vals, self.indices, self.indptr), shape=(N, N))
+
+
+def _csr_grid(blocks, N):
+    """``bmat`` of ``N x N`` CSR blocks (``None`` a zero block), assembled in CSR.
+
+    With every block CSR, scipy stacks the arrays instead of assembling through COO.
+    """
+    full = [[sp.csr_matrix((N, N)) if b is None else sp.csr_matrix(b) for b in row]
+            for row in blocks]
+    return sp.bmat(full, format="csr")
+
+
 @dataclass(frozen=True, eq=False)
 class AdhesionDerivatives:
     """The data of the exact first and second derivatives of ``E_A(U)`` at one curve.
@@ -495,27 +533,26 @@ class AdhesionDerivatives:
                              "the cumulative integral is dense); use form='dense'")
         N = c.N
         g, om = c.g, c.grid.weights
-        XX, XW, WW = self._pair_blocks()
         d = sp.diags
-        n = np.arange(N, dtype=np.int32)
+        # the blocks of K (see _pair_blocks) in CSR, one pattern for all of them
+        pat = _PairPattern(self.i.astype(np.int32), self.j.astype(np.int32), N)
+        i, j, w = self.i, self.j, c.dsigma
+        both = lambda v: np.bincount(i, v, N) + np.bincount(j, v, N)
+        Kxx, Kxy, Kyy = (pat.csr(-kv, -kv, both(kv)) for kv in (self.kxx, self.kxy, self.kyy))
+        wi, wj = w[i], w[j]
+        KXw = [pat.csr(f * wi, -f * wj, np.bincount(i, f * wj, N) - np.bincount(j, f * wi, N),
+                       column_scale=om) for f in (self.fx, self.fy)]
+        Kww = pat.csr(self.a2, self.a2, 2.0 * self.A0)
+        Kww = sp.csr_matrix((Kww.data * om[np.repeat(np.arange(N), np.diff(Kww.indptr))]
+                             * om[Kww.indices], Kww.indices, Kww.indptr), shape=(N, N))
+        bI = lambda v: d(np.broadcast_to(v, N).astype(float), format="csr")
         # L_UU = [[0, beta], [beta, omega K_ww omega]], on (kappa, g)
-        Luu = _Entries()
-        Luu.add(n, N + n, self.beta, True)
-        r, cc, v = WW.arrays()
-        Luu.add(N + r, N + cc, v * om[r] * om[cc])
+        Luu = _csr_grid([[None, bI(self.beta)], [bI(self.beta), Kww]], N)
         # L_YU = [[0, p], [0, K_Xw omega]], rows (theta, x, y), columns (kappa, g)
-        Lyu = _Entries()
-        Lyu.add(n, N + n, self.p)
-        r, cc, v = XW.arrays()
-        Lyu.add(N + r, N + cc, v * om[cc])
+        Lyu = _csr_grid([[None, bI(self.p)], [None, KXw[0]], [None, KXw[1]]], N)
         # L_YY = diag(-g a, K_XX)
-        Lyy = _Entries()
-        Lyy.add(n, n, -g * self.a)
-        r, cc, v = XX.arrays()
-        Lyy.add(N + r, N + cc, v)
+        Lyy = _csr_grid([[bI(-g * self.a), None, None], [None, Kxx, Kxy], [None, Kxy, Kyy]], N)
         cY, cU = position_state_equations(c)
-        Luu, Lyu, Lyy = (e.tocsr(shape) for e, shape in (
-            (Luu, (2 * N, 2 * N)), (Lyu, (3 * N, 2 * N)), (Lyy, (3 * N, 3 * N))))
         ds = c.dsigma
         return ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=d(1.0 / np.concatenate([ds, ds])))
 

@@ -11,7 +11,13 @@
 """
 
 from qsa.linalg.lu import Factorization, LowRankUpdate, factorize, permutation_parity
-from qsa.linalg.structured import ReducedHessian, SparsePlusLowRank, is_matrix_like, to_dense
+from qsa.linalg.structured import (
+    BlockSparse,
+    ReducedHessian,
+    SparsePlusLowRank,
+    is_matrix_like,
+    to_dense,
+)
 
-__all__ = ["SparsePlusLowRank", "ReducedHessian", "to_dense", "is_matrix_like", "factorize",
-           "Factorization", "LowRankUpdate", "permutation_parity"]
+__all__ = ["SparsePlusLowRank", "ReducedHessian", "BlockSparse", "to_dense", "is_matrix_like",
+           "factorize", "Factorization", "LowRankUpdate", "permutation_parity"]

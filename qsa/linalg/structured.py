@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["SparsePlusLowRank", "ReducedHessian", "to_dense", "is_matrix_like"]
+__all__ = ["SparsePlusLowRank", "ReducedHessian", "BlockSparse", "to_dense", "is_matrix_like"]
 
 
 class SparsePlusLowRank:
@@ -208,9 +208,11 @@ class ReducedHessian:
         if U.shape[1] != V.shape[1]:
             raise ValueError("ReducedHessian: U and V must have the same number of columns")
         self.U, self.V = U, V
-        self._lu = None
-        self._rows = None  # row structure of a triangular cY, for _solve_cY_many
-        self._transposes = None  # CSR Lyu^T and cU^T, for implicit_state
+        # derived from the core (Luu, Lyu, Lyy, cY, cU) alone, shared by every matrix
+        # _with makes from this one: the factors of cY ("lu"), the row structure of a
+        # triangular cY ("rows", for _solve_cY_many), CSR Lyu^T and cU^T ("transposes",
+        # for implicit_state), entrywise absolute values ("abs", for rounding bounds)
+        self._core = {}
 
     # ----------------------------------------------------------------- shape
     @property
@@ -237,21 +239,28 @@ class ReducedHessian:
                     left=self.left, right=self.right, S=self.S, U=self.U, V=self.V)
         args.update(changes)
         out = ReducedHessian(**args)
-        if "cY" not in changes:
-            out._lu, out._rows = self._lu, self._rows  # same cY: share its factorization
+        if not changes.keys() & {"Luu", "Lyu", "Lyy", "cY", "cU"}:
+            out._core = self._core  # same core: share what is derived from it
         return out
+
+    def abs_core(self):
+        """``|Luu|, |Lyu^T|, |Lyu|, |Lyy|`` (CSR, entrywise), formed once per core."""
+        if "abs" not in self._core:
+            self._core["abs"] = tuple(sp.csr_matrix(abs(A)) for A in
+                                      (self.Luu, self.Lyu.T, self.Lyu, self.Lyy))
+        return self._core["abs"]
 
     # -------------------------------------------------------------- products
     def _solve_cY(self, b, trans="N"):
         if self.cY.shape[0] == 0:  # no implicit state: H = S0 + Lf Luu Rf
             return np.zeros((0,) + np.shape(b)[1:])
-        if self._lu is None:
+        if "lu" not in self._core:
             cY = self.cY.tocsc()
             if sp.triu(cY, 1).nnz == 0:  # lower triangular: natural order, no fill
-                self._lu = spla.splu(cY, permc_spec="NATURAL", diag_pivot_thresh=0.0)
+                self._core["lu"] = spla.splu(cY, permc_spec="NATURAL", diag_pivot_thresh=0.0)
             else:
-                self._lu = spla.splu(cY)
-        return self._lu.solve(np.asarray(b, dtype=float), trans=trans)
+                self._core["lu"] = spla.splu(cY)
+        return self._core["lu"].solve(np.asarray(b, dtype=float), trans=trans)
 
     def _solve_cY_many(self, B, trans="N", overwrite=False):
         """``cY^{-1} B`` (or ``cY^{-T} B``) for a dense ``B`` with many columns, C-ordered.
@@ -262,11 +271,11 @@ class ReducedHessian:
         otherwise by its LU factors. ``overwrite`` lets a C-ordered float ``B`` be
         overwritten by the solution.
         """
-        if self._rows is None:
+        if "rows" not in self._core:
             cY = sp.csr_matrix(self.cY)
             lower = sp.triu(cY, 1).nnz == 0
             if not lower:
-                self._rows = False
+                self._core["rows"] = False
             else:
                 rows = {}
                 for name, A in (("N", cY), ("T", sp.csr_matrix(cY.T))):
@@ -278,12 +287,12 @@ class ReducedHessian:
                         on = cols == i
                         out.append((1.0 / vals[on][0], cols[~on], vals[~on]))
                     rows[name] = out
-                self._rows = rows
-        if self._rows is False:
+                self._core["rows"] = rows
+        if self._core["rows"] is False:
             return np.ascontiguousarray(self._solve_cY(np.asfortranarray(B), trans=trans))
         W = B if overwrite and B.dtype == float and B.flags.c_contiguous else \
             np.array(B, dtype=float, order="C")
-        rows = self._rows[trans]
+        rows = self._core["rows"][trans]
         order = range(len(rows)) if trans == "N" else range(len(rows) - 1, -1, -1)
         for i in order:
             inv, cols, vals = rows[i]
@@ -293,6 +302,12 @@ class ReducedHessian:
                 W[i] -= vals @ W[cols]
             W[i] *= inv
         return W
+
+    def _transposed(self):
+        """CSR ``Lyu^T`` and ``cU^T``, formed once per core."""
+        if "transposes" not in self._core:
+            self._core["transposes"] = (sp.csr_matrix(self.Lyu.T), sp.csr_matrix(self.cU.T))
+        return self._core["transposes"]
 
     def core_matvec(self, u):
         """``K u`` for the reduced Hessian ``K`` alone, ``u`` shape (p,) or (p, j)."""
@@ -312,9 +327,7 @@ class ReducedHessian:
         -------
         tuple of ndarray
         """
-        if self._transposes is None:
-            self._transposes = (sp.csr_matrix(self.Lyu.T), sp.csr_matrix(self.cU.T))
-        LyuT, cUT = self._transposes
+        LyuT, cUT = self._transposed()
         y = self._solve_cY(b6 - self.cU @ u)
         mu = self._solve_cY(b5 - self.Lyu @ u - self.Lyy @ y, trans="T")
         return self.Luu @ u + LyuT @ y + cUT @ mu - b4, y, mu
@@ -354,7 +367,10 @@ class ReducedHessian:
         p, m, k = self.Luu.shape[0], self.cY.shape[0], Q.shape[1]
         cUQ = sp.csc_matrix(self.cU @ Q)
         cUQt = sp.csr_matrix(cUQ.T)                             # (k, m)
-        both = sp.hstack([self.Lyy, self.Lyu], format="csc")    # (m, m + p)
+        LyuT, cUT = self._transposed()
+        # (m, m + p) by columns: the transposes of CSR matrices are CSC views, and
+        # stacking CSC blocks side by side only concatenates their arrays
+        both = sp.hstack([self.Lyy.T, LyuT.T], format="csc")
         T1 = np.empty((m + p, k))                               # [Lyy Z Q; Lyu^T Z Q]
         # rows of T1 whose column of [Lyy, Lyu] is short (the local parts of the state)
         # are sparse rows times Z Q; only the wide ones go through cY^{-T}
@@ -369,7 +385,7 @@ class ReducedHessian:
             T1[cols] = -np.asarray(cUQt @ W).T
         ty = np.asarray((self.Lyu @ Q).toarray()) + T1[:m]
         return (np.asarray((self.Luu @ Q).toarray()) + T1[m:]
-                - self.cU.T @ self._solve_cY_many(ty, trans="T", overwrite=True))
+                - cUT @ self._solve_cY_many(ty, trans="T", overwrite=True))
 
     def __matmul__(self, other):
         if isinstance(other, ReducedHessian):
@@ -551,7 +567,7 @@ class ReducedHessian:
         if isinstance(other, ReducedHessian):
             if other.shape != self.shape:
                 raise ValueError(f"shapes {self.shape} and {other.shape} do not match")
-            bd = lambda a, b: sp.block_diag([a, b], format="csr")
+            bd = _block_diag
             if _same(self.left, other.left) and _same(self.right, other.right):
                 # one core on the same unknowns: stack the states, keep Lf and Rf (so a
                 # diagonal scaling stays diagonal and augmented() stays compact)
@@ -595,6 +611,87 @@ class ReducedHessian:
     def __repr__(self):
         return (f"ReducedHessian(shape={self.shape}, state={self.cY.shape[0]}, nnz={self.nnz}, "
                 f"rank={self.U.shape[1]})")
+
+
+class BlockSparse:
+    """A block matrix of sparse blocks, multiplied block by block and assembled on demand.
+
+    Products cost the blocks' ``nnz`` and need no assembled copy of the whole matrix
+    (for large blocks, assembling it costs more than many products); :meth:`tocsc`
+    assembles it for a sparse LU.
+
+    Parameters
+    ----------
+    blocks : list of list
+        Rows of sparse matrices or ``None`` (a zero block), as for ``scipy.sparse.bmat``;
+        every block row and block column holds at least one matrix.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> B = BlockSparse([[sp.eye(2), None], [sp.csr_matrix(np.ones((1, 2))), sp.eye(1)]])
+    >>> (B @ np.array([1.0, 2.0, 3.0])).tolist(), B.shape
+    ([1.0, 2.0, 6.0], (3, 3))
+    >>> bool(np.allclose(B.tocsc().toarray() @ np.ones(3), B @ np.ones(3)))
+    True
+    """
+
+    __array_ufunc__ = None
+
+    def __init__(self, blocks):
+        rows = [next((b.shape[0] for b in row if b is not None), None) for row in blocks]
+        cols = [next((row[j].shape[1] for row in blocks if row[j] is not None), None)
+                for j in range(len(blocks[0]))]
+        if None in rows or None in cols:
+            raise ValueError("BlockSparse: every block row and column needs a matrix")
+        self._rows = np.concatenate([[0], np.cumsum(rows)]).astype(int)
+        self._cols = np.concatenate([[0], np.cumsum(cols)]).astype(int)
+        self.blocks = [[None if b is None else
+                        (b if getattr(b, "format", None) in ("csr", "csc") else sp.csr_matrix(b))
+                        for b in row] for row in blocks]
+
+    @property
+    def shape(self):
+        """``(n, m)``."""
+        return (int(self._rows[-1]), int(self._cols[-1]))
+
+    @property
+    def nnz(self):
+        """Stored entries of all blocks."""
+        return sum(b.nnz for row in self.blocks for b in row if b is not None)
+
+    def __matmul__(self, x):
+        x = np.asarray(x)
+        out = np.zeros((self.shape[0],) + x.shape[1:],
+                       dtype=np.result_type(x.dtype, *(b.dtype for row in self.blocks
+                                                       for b in row if b is not None)))
+        for i, row in enumerate(self.blocks):
+            r0, r1 = self._rows[i], self._rows[i + 1]
+            for j, b in enumerate(row):
+                if b is not None:
+                    out[r0:r1] += b @ x[self._cols[j]:self._cols[j + 1]]
+        return out
+
+    def astype(self, dtype):
+        """The same blocks with entries of ``dtype`` (e.g. ``np.longdouble``)."""
+        return BlockSparse([[None if b is None else b.astype(dtype) for b in row]
+                            for row in self.blocks])
+
+    def tocsc(self):
+        """The assembled matrix (``scipy.sparse`` CSC)."""
+        return sp.bmat(self.blocks, format="csc")
+
+    def tocsr(self):
+        """The assembled matrix (``scipy.sparse`` CSR)."""
+        return sp.bmat(self.blocks, format="csr")
+
+
+def _block_diag(A, B):
+    """``diag(A, B)`` in CSR, stacked from CSR blocks (scipy then joins the arrays
+    instead of assembling through COO, which costs several times more for wide blocks)."""
+    A, B = sp.csr_matrix(A), sp.csr_matrix(B)
+    return sp.bmat([[A, sp.csr_matrix((A.shape[0], B.shape[1]))],
+                    [sp.csr_matrix((B.shape[0], A.shape[1])), B]], format="csr")
 
 
 def _same(A, B) -> bool:

@@ -70,7 +70,7 @@ import scipy.sparse.linalg as spla
 
 from qsa import geometry
 from qsa.curve import Curve
-from qsa.linalg import Factorization, ReducedHessian, SparsePlusLowRank, factorize
+from qsa.linalg import BlockSparse, Factorization, ReducedHessian, SparsePlusLowRank, factorize
 from qsa.spectra.capacitance import CapacitanceCore, use_capacitance
 
 __all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
@@ -323,22 +323,12 @@ def _reduced_rounding(K, psi):
     z = -K._solve_cY(K.cU @ u)
     zl = -K._solve_cY(K.cU @ l)
     al, au, az, azl = np.abs(l), np.abs(u), np.abs(z), np.abs(zl)
-    Auu, AyuT, Ayu, Ayy, Ar, AlT = _abs_factors(K)
+    Auu, AyuT, Ayu, Ayy = K.abs_core()
     out = (np.sum(al * (Auu @ au), axis=0) + np.sum(al * (AyuT @ az), axis=0)
            + np.sum(azl * (Ayu @ au), axis=0) + np.sum(azl * (Ayy @ az), axis=0))
     apsi = np.abs(psi)
-    return (out + np.sum(np.abs(K.core_matvec(l)) * (Ar @ apsi), axis=0)
-            + np.sum(np.abs(K.core_matvec(u)) * (AlT @ apsi), axis=0))
-
-
-def _abs_factors(K):
-    """``|Luu|, |Lyu^T|, |Lyu|, |Lyy|, |Rf|, |Lf^T|`` of ``K`` (CSR), computed once per ``K``."""
-    cached = getattr(K, "_abs_factors", None)
-    if cached is None:
-        cached = tuple(sp.csr_matrix(abs(A)) for A in (K.Luu, K.Lyu.T, K.Lyu, K.Lyy, K.right,
-                                                         K.left.T))
-        K._abs_factors = cached
-    return cached
+    return (out + np.sum(np.abs(K.core_matvec(l)) * (abs(K.right) @ apsi), axis=0)
+            + np.sum(np.abs(K.core_matvec(u)) * (abs(K.left.T) @ apsi), axis=0))
 
 
 @dataclass(frozen=True)
@@ -463,7 +453,7 @@ class ShiftInvert:
             local = blocks
             if op.reduced is not None:
                 blocks = _with_implicit_state(blocks, op.reduced, dgk, N)
-            core = sp.bmat(blocks, format="csc")
+            core = BlockSparse(blocks)  # assembled only for a sparse LU
         else:
             I = np.eye(N)
             A11 = -sigma * np.diag(w) - gk[:, None] * Hgg * gk[None, :]
@@ -503,10 +493,9 @@ class ShiftInvert:
                 self._capacitance = cap
                 self.core_solver = "capacitance"
         if self._lu is None:
-            self._lu = factorize(core, B1, B2, D)
+            self._lu = factorize(core.tocsc() if sparse else core, B1, B2, D)
         self._free = None
         self._ext = None
-        self._core_rows = None
         self._probe: dict = {}
         self.last_correction = np.zeros(0)
 
@@ -519,8 +508,7 @@ class ShiftInvert:
         """The bordered matrix's blocks in extended precision (``np.longdouble``), cached."""
         if self._ext is None:
             ld = np.longdouble
-            core = self._core.tocsr().astype(ld) if sp.issparse(self._core) else \
-                np.asarray(self._core, dtype=ld)
+            core = self._core.astype(ld)
             self._ext = (core, self._B1.astype(ld), self._B2.astype(ld), self._D.astype(ld))
         core, B1, B2, D = self._ext
         return core, B1[:, :p], B2[:p], D[:p, :p]
@@ -542,10 +530,8 @@ class ShiftInvert:
 
     def _residual_double(self, rhs, x, p):
         """``rhs - A x`` in working precision (classical iterative refinement)."""
-        if self._core_rows is None:
-            self._core_rows = self._core.tocsr() if sp.issparse(self._core) else self._core
         n = self._core.shape[0]
-        y = self._core_rows @ x[:n] + self._B1[:, :p] @ x[n:]
+        y = self._core @ x[:n] + self._B1[:, :p] @ x[n:]
         z = self._B2[:p] @ x[:n] + self._D[:p, :p] @ x[n:]
         return rhs - np.concatenate([y, z], axis=0)
 

@@ -69,10 +69,11 @@ def operator_norm(curve: Curve, A, iters=30, seed=0) -> float:
     x = np.random.default_rng(seed).standard_normal(n)
     x /= np.linalg.norm(x)
     val = 0.0
+    AT = A.T  # once: the transpose of a structured matrix is an object of its own
     for _ in range(iters):
         # B = W^{1/2} A W^{-1/2}; power iteration on B^T B
         y = rw * (A @ (x / rw))
-        z = (A.T @ (rw * y)) / rw
+        z = (AT @ (rw * y)) / rw
         nz = np.linalg.norm(z)
         if nz == 0 or not np.isfinite(nz):
             return float(np.linalg.norm(y))

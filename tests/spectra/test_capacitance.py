@@ -53,7 +53,7 @@ def test_capacitance_solves_the_whole_core(forced, sigma):
     c, op = _operator(200, 0.1)
     si = ShiftInvert(op, sigma)
     assert si.core_solver == "capacitance"
-    core = si._core
+    core = si._core.tocsc()
     n = core.shape[0]
     b = np.random.default_rng(2).standard_normal((n, 3))
     x = si._lu._solve(b)  # the core alone, without the border
