@@ -38,7 +38,7 @@ from qsa.curve import Curve, check_simple
 from qsa.discretize import FiniteDifference, Fourier
 from qsa.spectra.factored import FactoredNormalOperator
 from qsa.spectra.hessian import check_input, lagrange_hessian
-from qsa.spectra.kernel import build_kernel_report, constraint_bases, kernel_size
+from qsa.spectra.kernel import build_kernel_report, constraint_bases, kernel_size, lanczos_norm
 from qsa.spectra.linearization import _check_gauge, linearization, scaled_operator
 from qsa.spectra.result import MESSAGES, KernelReport, Spectrum
 from qsa.spectra.solvers import (
@@ -516,18 +516,9 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         constraint_multipliers=np.array(LH.constraint_multipliers, dtype=float))
 
 
-def _roundoff(op, iters=30):
-    """``eps |J|``, ``|J|`` by power iteration with the factored product (J is self-adjoint)."""
-    x = np.random.default_rng(0).standard_normal(op.N)
-    val = 0.0
-    for _ in range(iters):
-        y = op.matvec(x)
-        ny = float(np.sqrt(np.sum(op.w * y * y)))
-        nx = float(np.sqrt(np.sum(op.w * x * x)))
-        if ny == 0 or not np.isfinite(ny):
-            break
-        val, x = ny / nx, y / ny
-    return float(_EPS * val)
+def _roundoff(op, steps=15):
+    """``eps |J|``, ``|J|`` by Lanczos with the factored product (``J`` is self-adjoint)."""
+    return float(_EPS * lanczos_norm(op.matvec, None, op.w, steps))
 
 
 def _asymmetry(H, probes=3):
