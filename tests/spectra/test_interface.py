@@ -201,6 +201,25 @@ def test_energy_kernel_note_only_when_lambda3_matters():
     assert k.lagrange_kernel == 0.0 and k.energy_kernel == 0.0
 
 
+def test_lanczos_norm_is_a_lower_bound_exact_on_exhausting_the_space():
+    from qsa.spectra.kernel import lanczos_norm
+
+    rng = np.random.default_rng(4)
+    n = 40
+    w = rng.uniform(0.5, 2.0, n)
+    A = rng.standard_normal((n, n))
+    S = (A + A.T) / w[:, None]  # w-self-adjoint: W S symmetric
+    rw = np.sqrt(w)
+    normA = np.linalg.norm(rw[:, None] * A / rw[None, :], 2)
+    normS = np.max(np.abs(np.linalg.eigvals(S).real))
+    gk = [lanczos_norm(lambda x: A @ x, lambda x: A.T @ x, w, k) for k in (3, 10, n)]
+    la = [lanczos_norm(lambda x: S @ x, None, w, k) for k in (3, 10, n)]
+    assert gk[0] <= gk[1] + 1e-12 <= normA * (1 + 1e-12) and gk[2] == pytest.approx(normA, 1e-10)
+    assert la[0] <= la[1] + 1e-12 <= normS * (1 + 1e-12) and la[2] == pytest.approx(normS, 1e-10)
+    # a non-finite product ends the iteration with the estimate so far (0 on the first)
+    assert lanczos_norm(lambda x: x * np.nan, None, w, 5) == 0.0
+
+
 def test_operator_norm_and_second_resolution(eq):
     from qsa.spectra import normal_operator, operator_norm, second_resolution
 
@@ -208,5 +227,7 @@ def test_operator_norm_and_second_resolution(eq):
     lam = np.linalg.eigvals(J).real
     # J is dsigma-self-adjoint: its <.,.>-norm is its spectral radius
     assert operator_norm(eq.curve, J, iters=200) == pytest.approx(np.max(np.abs(lam)), rel=1e-6)
+    assert operator_norm(eq.curve, J, iters=200, symmetric=True) == pytest.approx(
+        np.max(np.abs(lam)), rel=1e-6)
     assert second_resolution(Fourier(81)) == Fourier(123)
     assert second_resolution(FiniteDifference(100)) == FiniteDifference(150)
