@@ -103,6 +103,24 @@ def test_transposes_and_factors_are_shared_only_with_the_same_core():
     assert np.allclose(AyuT.toarray(), np.abs(H.Lyu.toarray()).T)
 
 
+@pytest.mark.parametrize("lower", [True, False])
+@pytest.mark.parametrize("p, m", [(9, 8), (80, 90)])  # (80, 90): columns wider than 64
+def test_core_matmat_with_triangular_and_general_state_equations(lower, p, m):
+    """K Q by the transposed solves equals K applied to Q's columns, for a triangular cY
+    (row-by-row substitution) and a general one (its sparse LU)."""
+    H, _ = random_reduced(6, p=p, m=m)
+    cY = H.cY.toarray()
+    if not lower:
+        cY = cY + np.triu(np.full_like(cY, 1.0 / m), 1)
+    K = ReducedHessian(H.Luu, H.Lyu, H.Lyy, sp.csr_matrix(cY), H.cU)
+    Q = sp.random(p, 5, density=0.4, random_state=2, format="csr")
+    want = K.core_matvec(Q.toarray())
+    for block in (2, 64):
+        got = K.core_matmat(Q, block=block)
+        assert np.linalg.norm(got - want) <= 1e-12 * np.linalg.norm(want)
+    assert (K._core["rows"] is False) is (not lower)
+
+
 @pytest.mark.parametrize("dtype", [float, np.longdouble])
 def test_block_sparse_products_equal_the_assembled_matrix(dtype):
     rng = np.random.default_rng(5)
