@@ -364,28 +364,31 @@ class ReducedHessian:
         True
         """
         Q = sp.csr_matrix(Q)
-        p, m, k = self.Luu.shape[0], self.cY.shape[0], Q.shape[1]
+        k = Q.shape[1]
         cUQ = sp.csc_matrix(self.cU @ Q)
         cUQt = sp.csr_matrix(cUQ.T)                             # (k, m)
         LyuT, cUT = self._transposed()
-        # (m, m + p) by columns: the transposes of CSR matrices are CSC views, and
-        # stacking CSC blocks side by side only concatenates their arrays
-        both = sp.hstack([self.Lyy.T, LyuT.T], format="csc")
-        T1 = np.empty((m + p, k))                               # [Lyy Z Q; Lyu^T Z Q]
-        # rows of T1 whose column of [Lyy, Lyu] is short (the local parts of the state)
-        # are sparse rows times Z Q; only the wide ones go through cY^{-T}
-        short = np.diff(both.indptr) <= max(64, k // 8)
-        narrow, wide = np.flatnonzero(short), np.flatnonzero(~short)
-        if narrow.size:
-            ZQ = self._solve_cY_many(cUQ.toarray(order="C"), overwrite=True)  # -Z Q, (m, k)
-            T1[narrow] = -np.asarray(sp.csr_matrix(both[:, narrow].T) @ ZQ)
-        for start in range(0, wide.size, block):
-            cols = wide[start:start + block]
-            W = self._solve_cY_many(both[:, cols].toarray(order="C"), trans="T", overwrite=True)
-            T1[cols] = -np.asarray(cUQt @ W).T
-        ty = np.asarray((self.Lyu @ Q).toarray()) + T1[:m]
-        return (np.asarray((self.Luu @ Q).toarray()) + T1[m:]
-                - cUT @ self._solve_cY_many(ty, trans="T", overwrite=True))
+        ty = np.asarray((self.Lyu @ Q).toarray())               # Lyu Q + Lyy Z Q
+        tu = np.asarray((self.Luu @ Q).toarray())               # Luu Q + Lyu^T Z Q
+        ZQ = None                                               # -Z Q, (m, k), if needed
+        # the columns of Lyy (symmetric) and Lyu: the transposes of CSR matrices are CSC
+        for cols_of, dest in ((self.Lyy.T, ty), (LyuT.T, tu)):
+            # a short column (the local parts of the state) is a sparse row times Z Q;
+            # only the wide ones go through cY^{-T}
+            length = np.diff(cols_of.indptr)
+            short = length <= max(64, k // 8)
+            narrow, wide = np.flatnonzero(short & (length > 0)), np.flatnonzero(~short)
+            if narrow.size:
+                if ZQ is None:
+                    ZQ = self._solve_cY_many(cUQ.toarray(order="C"), overwrite=True)
+                dest[narrow] -= cols_of[:, narrow].T @ ZQ
+            for start in range(0, wide.size, block):
+                cols = wide[start:start + block]
+                W = self._solve_cY_many(cols_of[:, cols].toarray(order="C"), trans="T",
+                                        overwrite=True)
+                dest[cols] -= (cUQt @ W).T
+        tu -= cUT @ self._solve_cY_many(ty, trans="T", overwrite=True)
+        return tu
 
     def __matmul__(self, other):
         if isinstance(other, ReducedHessian):
