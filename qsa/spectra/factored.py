@@ -440,6 +440,7 @@ class ShiftInvert:
               else np.asarray(constrain, dtype=float).reshape(-1, N))
         self.R, self.Rc = R, Rc
         sparse = op.curve.grid.sparse
+        core: Any  # BlockSparse (finite differences) or ndarray (Fourier)
         w, gk, G, H = op.w, op.gk, op.G, op.H
         Hkk, Hkg = H[:N, :N], H[:N, N:]
         Hgk, Hgg = H[N:, :N], H[N:, N:]

@@ -88,8 +88,10 @@ def lanczos_norm(matvec, rmatvec, w, steps, seed=0) -> float:
     BT = B if rmatvec is None else (lambda x: rmatvec(rw * x) / rw)
     v = np.random.default_rng(seed).standard_normal(n)
     v /= np.linalg.norm(v)
-    V, U = [v], []
-    alphas, betas = [], []
+    V: list[np.ndarray] = [v]
+    U: list[np.ndarray] = []
+    alphas: list[float] = []
+    betas: list[float] = []
 
     def orth(x, basis):
         for _ in range(2):  # twice is enough (classical Gram-Schmidt)
