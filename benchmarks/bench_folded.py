@@ -50,8 +50,9 @@ def energy_of(scenario, L0, method):
 
 
 # peak memory per interacting pair of the whole measurement (Hessian, implicit-state
-# system, its extended-precision copy, capacitance): ~1.6 kB measured at N = 2400 and 4800
-BYTES_PER_PAIR = 1.7e3
+# system, its extended-precision copy, capacitance): ~1.2 kB measured at N = 2400, 1.0 kB
+# at 4800
+BYTES_PER_PAIR = 1.2e3
 
 
 def measure(scenario, N, method, source):
