@@ -41,9 +41,10 @@ def operator_norm(curve: Curve, A, iters=30, seed=0, symmetric=False) -> float:
     ``A`` acts on nodal (N,) or stacked (2N,) vectors. ``iters`` steps of Golub-Kahan
     bidiagonalization of ``B = W^{1/2} A W^{-1/2}`` (one product with ``A`` and one with
     ``A.T`` each, fully reorthogonalized) from a random start; the estimate is the
-    largest singular value of the bidiagonal matrix, a lower bound of ``|A|`` that is
-    never below the power-iteration estimate of as many products and is exact once
-    the steps exhaust the space. With ``symmetric=True`` (``A`` self-adjoint in
+    largest singular value of the bidiagonal matrix, a lower bound of ``|A|`` that grows
+    with the steps, converges faster than power iteration with as many products
+    (clustered top singular values included) and is exact once the steps exhaust the
+    space. With ``symmetric=True`` (``A`` self-adjoint in
     ``<.,.>``) Lanczos on ``B`` itself takes one product per step.
 
     Parameters
