@@ -112,7 +112,7 @@ import scipy.sparse as sp
 
 from qsa.curve import Curve
 from qsa.discretize import cumulative_factors
-from qsa.linalg import ReducedHessian
+from qsa.linalg import BlockSparse, ReducedHessian
 
 __all__ = ["AdhesionDerivatives", "adhesion_derivatives", "cumulative_factors",
            "position_state_equations", "HESSIAN_FORMS"]
@@ -207,30 +207,26 @@ class _PairPattern:
         n = np.arange(N, dtype=np.int32)
         rows, cols = np.concatenate([i, j, n]), np.concatenate([j, i, n])
         self.order = np.lexsort((cols, rows))
+        self.rows = rows[self.order].astype(np.int32)
         self.indices = cols[self.order].astype(np.int32)
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=N))]).astype(
             np.int32 if rows.size < 2**31 else np.int64)
         self.N = N
 
-    def csr(self, upper, lower, diagonal, column_scale=None):
-        """The block with ``upper`` at ``(i, j)``, ``lower`` at ``(j, i)``, ``diagonal``."""
+    def csr(self, values, row_scale=None, column_scale=None):
+        """The block with ``values = (upper, lower, diagonal)`` at ``(i, j)``, ``(j, i)`` and
+        on the diagonal, optionally scaled by ``diag(row_scale)`` on the left and
+        ``diag(column_scale)`` on the right."""
         N = self.N
+        upper, lower, diagonal = values
         vals = np.concatenate([np.broadcast_to(upper, (self.order.size - N) // 2),
                                np.broadcast_to(lower, (self.order.size - N) // 2),
                                np.broadcast_to(diagonal, N)])[self.order]
+        if row_scale is not None:
+            vals *= row_scale[self.rows]
         if column_scale is not None:
             vals *= column_scale[self.indices]
         return sp.csr_matrix((vals, self.indices, self.indptr), shape=(N, N))
-
-
-def _csr_grid(blocks, N):
-    """``bmat`` of ``N x N`` CSR blocks (``None`` a zero block), assembled in CSR.
-
-    With every block CSR, scipy stacks the arrays instead of assembling through COO.
-    """
-    full = [[sp.csr_matrix((N, N)) if b is None else sp.csr_matrix(b) for b in row]
-            for row in blocks]
-    return sp.bmat(full, format="csr")
 
 
 @dataclass(frozen=True, eq=False)
@@ -425,6 +421,22 @@ class AdhesionDerivatives:
         return out / (w2 if out.ndim == 1 else w2[:, None])
 
     # ------------------------------------------------------------ assembly
+    def _block_values(self):
+        """``(upper, lower, diagonal)`` of ``K``'s ``N x N`` blocks: the values at the pairs
+        ``(i, j)``, at their mirror images ``(j, i)`` and on the diagonal, keyed by block
+        (``"xx", "xy", "yy"`` of ``K_XX``, ``"xw", "yw"`` of ``K_Xw``, ``"ww"``)."""
+        N = self.curve.N
+        i, j = self.i, self.j
+        w = self.curve.dsigma
+        wi, wj = w[i], w[j]
+        both = lambda v: np.bincount(i, v, N) + np.bincount(j, v, N)
+        out = {name: (-kv, -kv, both(kv))
+               for name, kv in (("xx", self.kxx), ("xy", self.kxy), ("yy", self.kyy))}
+        for name, f in (("xw", self.fx), ("yw", self.fy)):
+            out[name] = (f * wi, -f * wj, np.bincount(i, f * wj, N) - np.bincount(j, f * wi, N))
+        out["ww"] = (self.a2, self.a2, np.full(N, 2.0 * self.A0))
+        return out
+
     def _pair_blocks(self):
         """Entries of ``K``'s blocks ``K_XX`` (2N, 2N), ``K_Xw`` (2N, N), ``K_ww`` (N, N).
 
@@ -433,22 +445,23 @@ class AdhesionDerivatives:
         """
         N = self.curve.N
         i, j = self.i.astype(np.int32), self.j.astype(np.int32)  # halves the index memory
-        w = self.curve.dsigma
-        wi, wj = w[i], w[j]
         n = np.arange(N, dtype=np.int32)
-        both = lambda v: np.bincount(i, v, N) + np.bincount(j, v, N)
+        v = self._block_values()
         XX, XW, WW = _Entries(), _Entries(), _Entries()
-        for ro, co, kv in ((0, 0, self.kxx), (0, N, self.kxy), (N, N, self.kyy)):
+        for ro, co, name in ((0, 0, "xx"), (0, N, "xy"), (N, N, "yy")):
+            upper, lower, diagonal = v[name]
             mirror = ro != co
-            XX.add(ro + i, co + j, -kv, mirror)
-            XX.add(ro + j, co + i, -kv, mirror)
-            XX.add(ro + n, co + n, both(kv), mirror)
-        for ro, f in ((0, self.fx), (N, self.fy)):
-            XW.add(ro + i, j, f * wi)
-            XW.add(ro + j, i, -f * wj)
-            XW.add(ro + n, n, np.bincount(i, f * wj, N) - np.bincount(j, f * wi, N))
-        WW.add(i, j, self.a2, True)
-        WW.add(n, n, np.full(N, 2.0 * self.A0))
+            XX.add(ro + i, co + j, upper, mirror)
+            XX.add(ro + j, co + i, lower, mirror)
+            XX.add(ro + n, co + n, diagonal, mirror)
+        for ro, name in ((0, "xw"), (N, "yw")):
+            upper, lower, diagonal = v[name]
+            XW.add(ro + i, j, upper)
+            XW.add(ro + j, i, lower)
+            XW.add(ro + n, n, diagonal)
+        upper, _, diagonal = v["ww"]  # symmetric
+        WW.add(i, j, upper, True)
+        WW.add(n, n, diagonal)
         return XX, XW, WW
 
     def pair_hessian(self):
@@ -534,24 +547,20 @@ class AdhesionDerivatives:
         N = c.N
         g, om = c.g, c.grid.weights
         d = sp.diags
-        # the blocks of K (see _pair_blocks) in CSR, one pattern for all of them
+        # the blocks of K (_block_values) in CSR, one pattern for all of them
         pat = _PairPattern(self.i.astype(np.int32), self.j.astype(np.int32), N)
-        i, j, w = self.i, self.j, c.dsigma
-        both = lambda v: np.bincount(i, v, N) + np.bincount(j, v, N)
-        Kxx, Kxy, Kyy = (pat.csr(-kv, -kv, both(kv)) for kv in (self.kxx, self.kxy, self.kyy))
-        wi, wj = w[i], w[j]
-        KXw = [pat.csr(f * wi, -f * wj, np.bincount(i, f * wj, N) - np.bincount(j, f * wi, N),
-                       column_scale=om) for f in (self.fx, self.fy)]
-        Kww = pat.csr(self.a2, self.a2, 2.0 * self.A0)
-        Kww = sp.csr_matrix((Kww.data * om[np.repeat(np.arange(N), np.diff(Kww.indptr))]
-                             * om[Kww.indices], Kww.indices, Kww.indptr), shape=(N, N))
+        v = self._block_values()
+        Kxx, Kxy, Kyy = (pat.csr(v[name]) for name in ("xx", "xy", "yy"))
+        Kxw, Kyw = (pat.csr(v[name], column_scale=om) for name in ("xw", "yw"))
+        Kww = pat.csr(v["ww"], row_scale=om, column_scale=om)
         bI = lambda v: d(np.broadcast_to(v, N).astype(float), format="csr")
+        grid = lambda blocks: BlockSparse(blocks).tocsr()
         # L_UU = [[0, beta], [beta, omega K_ww omega]], on (kappa, g)
-        Luu = _csr_grid([[None, bI(self.beta)], [bI(self.beta), Kww]], N)
+        Luu = grid([[None, bI(self.beta)], [bI(self.beta), Kww]])
         # L_YU = [[0, p], [0, K_Xw omega]], rows (theta, x, y), columns (kappa, g)
-        Lyu = _csr_grid([[None, bI(self.p)], [None, KXw[0]], [None, KXw[1]]], N)
+        Lyu = grid([[sp.csr_matrix((N, N)), bI(self.p)], [None, Kxw], [None, Kyw]])
         # L_YY = diag(-g a, K_XX)
-        Lyy = _csr_grid([[bI(-g * self.a), None, None], [None, Kxx, Kxy], [None, Kxy, Kyy]], N)
+        Lyy = grid([[bI(-g * self.a), None, None], [None, Kxx, Kxy], [None, Kxy, Kyy]])
         cY, cU = position_state_equations(c)
         ds = c.dsigma
         return ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=d(1.0 / np.concatenate([ds, ds])))

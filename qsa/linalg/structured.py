@@ -570,7 +570,7 @@ class ReducedHessian:
         if isinstance(other, ReducedHessian):
             if other.shape != self.shape:
                 raise ValueError(f"shapes {self.shape} and {other.shape} do not match")
-            bd = _block_diag
+            bd = lambda A, B: BlockSparse([[A, None], [None, B]]).tocsr()
             if _same(self.left, other.left) and _same(self.right, other.right):
                 # one core on the same unknowns: stack the states, keep Lf and Rf (so a
                 # diagonal scaling stays diagonal and augmented() stays compact)
@@ -680,21 +680,23 @@ class BlockSparse:
         return BlockSparse([[None if b is None else b.astype(dtype) for b in row]
                             for row in self.blocks])
 
+    def _assembled(self, fmt):
+        # with every block in the target format (zero blocks as empty ones), scipy joins
+        # the blocks' arrays instead of assembling through COO
+        convert = sp.csr_matrix if fmt == "csr" else sp.csc_matrix
+        rows, cols = np.diff(self._rows), np.diff(self._cols)
+        full = [[convert((int(r), int(c))) if b is None else convert(b)
+                 for b, c in zip(row, cols, strict=True)]
+                for row, r in zip(self.blocks, rows, strict=True)]
+        return sp.bmat(full, format=fmt)
+
     def tocsc(self):
         """The assembled matrix (``scipy.sparse`` CSC)."""
-        return sp.bmat(self.blocks, format="csc")
+        return self._assembled("csc")
 
     def tocsr(self):
         """The assembled matrix (``scipy.sparse`` CSR)."""
-        return sp.bmat(self.blocks, format="csr")
-
-
-def _block_diag(A, B):
-    """``diag(A, B)`` in CSR, stacked from CSR blocks (scipy then joins the arrays
-    instead of assembling through COO, which costs several times more for wide blocks)."""
-    A, B = sp.csr_matrix(A), sp.csr_matrix(B)
-    return sp.bmat([[A, sp.csr_matrix((A.shape[0], B.shape[1]))],
-                    [sp.csr_matrix((B.shape[0], A.shape[1])), B]], format="csr")
+        return self._assembled("csr")
 
 
 def _same(A, B) -> bool:
