@@ -4,7 +4,9 @@ For each scenario of ``qsa reproduce fronts`` the DAE (``solve_flow``, BDF2, tol
 stopped at the first pair annihilation; run through
 :func:`qsa.paper.compare_fronts`) at each resolution N, and the four
 reductions (force correction none / newton, fixed length / variable length with
-beta = 5) stopped at their first collision, with the settings of ``compare_fronts``
+beta = 5) and the two on the manifold of quasi-steady profiles (``profile``,
+``profile-lag``: fixed length, numpy only) stopped at their first collision, with the
+settings of ``compare_fronts``
 (rtol 1e-4, ``method="auto"``: RK45, or Radau for a stiff perimeter mode), each with both
 right-hand-side backends (``numpy``, the reference, and the compiled ``numba`` kernel
 when numba is installed: ``pip install qsa[fast]``). Prints CPU seconds
@@ -32,14 +34,17 @@ import numpy as np
 from qsa.paper import SCENARIOS, compare_fronts
 from qsa.reduction import FrontODE
 
-VARIANTS = [(None, False), ("newton", False), (None, True), ("newton", True)]
+VARIANTS = [(None, False), ("newton", False), (None, True), ("newton", True),
+            ("profile", False), ("profile-lag", False)]
 
 
-def backends():
-    """The available right-hand-side backends."""
+def backends(correction=None):
+    """The available right-hand-side backends (numpy only for the profile manifold)."""
     try:
         import numba  # noqa: F401
     except ImportError:
+        return ["numpy"]
+    if correction in ("profile", "profile-lag"):
         return ["numpy"]
     return ["numpy", "numba"]
 
@@ -87,9 +92,10 @@ def main(Ns):
         f"{(c or 'none') + (', var L' if v else ', fixed'):>16s}" for c, v in VARIANTS))
     for name in SCENARIOS:
         for backend in backends():
-            cells = [eval_us(name, c, v, backend) for c, v in VARIANTS]
+            cells = [eval_us(name, c, v, backend) if backend in backends(c) else None
+                     for c, v in VARIANTS]
             print(f"  {name:12s} {cells[0][1]:5d} {backend:>7s} "
-                  + " ".join(f"{us:16.1f}" for us, _ in cells))
+                  + " ".join(f"{c[0]:16.1f}" if c else f"{'-':>16s}" for c in cells))
     for name in SCENARIOS:
         dae = {}
         print(f"{name}: DAE (beta = 5)")
@@ -103,7 +109,7 @@ def main(Ns):
         print(f"  {'reduction':22s} {'backend':>7s} {'cpu s':>7s} {'n_rhs':>5s} {'us/rhs':>7s}"
               f"{head} {'t_c':>10s}{diff}")
         for correction, variable in VARIANTS:
-            for backend in backends():
+            for backend in backends(correction):
                 cpu, n_rhs, tc = ode_cpu(name, correction, variable, backend)
                 label = f"{correction or 'none'}, {'variable' if variable else 'fixed'} L"
                 sp = "".join(f" {dae[N][0] / cpu:11.0f}" for N in Ns)

@@ -33,8 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from qsa import Fourier
-from qsa.equilibria import heteroclinic
+from qsa.equilibria import default_cutoff, heteroclinic
 from qsa.equilibria import polish as polish_curve
+from qsa.equilibria.splice import polygon_positions
 from qsa.paper.results import _Summarised
 from qsa.paper.scenarios import Scenario, front_scenario
 from qsa.reduction import FrontODE
@@ -85,6 +86,8 @@ class EigenvalueComparison(_Summarised):
         Force of the reduction.
     min_facet : float
         Smallest facet of the splice.
+    length : str
+        Where the reduction was linearized (``"splice"`` or ``"equilibrium"``).
     """
 
     scenario: Scenario
@@ -104,6 +107,7 @@ class EigenvalueComparison(_Summarised):
     N: int
     correction: str | None
     min_facet: float
+    length: str = "splice"
 
     @property
     def n_corners(self):
@@ -126,7 +130,8 @@ class EigenvalueComparison(_Summarised):
                 "max_rel_diff": self.max_rel_diff, "equilibrium": self.equilibrium,
                 "polish_residual": self.polish_residual,
                 "polish_success": self.polish_success,
-                "spectrum_status": self.spectrum_status, "N": self.N, "pairing": "overlap"}
+                "spectrum_status": self.spectrum_status, "N": self.N, "pairing": "overlap",
+                "length": self.length}
 
 
 def polygon_scenario(n_corners, facet=0.35, angles=None, facets=None):
@@ -149,7 +154,8 @@ def _is_regular(sc):
 
 
 def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, angles=None,
-                        facets=None, *, correction=None, polish=None, extra=None, rtol=1e-4):
+                        facets=None, *, correction=None, polish=None, extra=None, rtol=1e-4,
+                        length="splice"):
     """Slow eigenvalues of the reduced Jacobian against the full linearization, paired by mode.
 
     Parameters
@@ -165,8 +171,8 @@ def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, 
         Fourier nodes of the full linearization (odd); default three per front
         width ``1/lambda`` (:func:`qsa.reduction.manifold.quadrature_size`), where the
         slow eigenvalues are converged to ~1e-5.
-    correction : {None, "newton"}
-        Force of the reduction (:class:`qsa.reduction.FrontODE`).
+    correction : {None, "newton", "profile", "profile-lag"}
+        The reduction's manifold and force (:class:`qsa.reduction.FrontODE`).
     polish : bool, optional
         Take the full spectrum at the polished equilibrium (default: for regular
         polygons) or at the splice itself (the operator at a quasi-equilibrium; see
@@ -177,6 +183,13 @@ def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, 
     rtol : float
         Relative accuracy required of a full eigenvalue
         (:func:`qsa.spectra.spectrum`; far below the differences compared).
+    length : {"splice", "equilibrium"}
+        Where the reduction is linearized: at the splice of the scenario (length
+        ``L*``), or, for a polished regular polygon, at the same rest point as the
+        full spectrum -- the regular splice of the polished N-pulse's length (the
+        perimeter penalty lets the overlapping corners lengthen the curve: the
+        octagon with facets 0.35 by 1.7e-3, which moves its facet eigenvalues by
+        0.7%).
 
     Returns
     -------
@@ -196,19 +209,29 @@ def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, 
     if N is None:
         L0 = sc.splice().params["L"]
         N = quadrature_size(L0, heteroclinic(sc.alpha, kstar=sc.kstar).width, 3.0)
+    if length not in ("splice", "equilibrium"):
+        raise ValueError(f"length must be 'splice' or 'equilibrium', got {length!r}")
     eq = sc.splice(Fourier(N))
     p = np.array(eq.params["positions"])
     L = eq.params["L"]
-    ode = FrontODE(sc.alpha, sc.kstar, L, correction=correction)
-    red = reduced_modes(ode, p, tuple(eq.params["cutoff"]))
-    m = red.eigenvalues.size
+    cut = tuple(eq.params["cutoff"])
     do_polish = _is_regular(sc) if polish is None else bool(polish)
+    if length == "equilibrium" and not (do_polish and _is_regular(sc)):
+        raise ValueError("length='equilibrium' needs a regular polygon with polish")
     curve, energy = eq.curve, eq.energy
     pol_res, pol_ok = np.nan, False
     if do_polish:
         pol = polish_curve(eq.energy, eq.curve)
         curve, energy = pol.curve, pol.energy
         pol_res, pol_ok = float(pol.residual), bool(pol.success)
+    if length == "equilibrium":
+        n_c = len(sc.angles)
+        facets_eq = np.asarray(sc.facets) + (curve.length() - L) / n_c
+        p, L = polygon_positions(np.deg2rad(sc.angles), facets_eq, sc.kstar)
+        cut = default_cutoff(p, L)
+    ode = FrontODE(sc.alpha, sc.kstar, L, correction=correction)
+    red = reduced_modes(ode, p, cut)
+    m = red.eigenvalues.size
     k = m + 3 + (2 * len(sc.angles) if extra is None else int(extra))
     with warnings.catch_warnings():
         # at a splice (no polish) the curve is a quasi-equilibrium by design
@@ -230,4 +253,5 @@ def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, 
     return EigenvalueComparison(
         sc, red.eigenvalues, full, err[pairing.index], rel, pairing.cosine, pairing.capture,
         np.sort(spec.eigenvalues[kern]), np.sort(lam)[::-1], float(rel.max()), do_polish,
-        pol_res, pol_ok, int(spec.status), int(N), correction, float(gaps[1::2].min()))
+        pol_res, pol_ok, int(spec.status), int(N), correction, float(gaps[1::2].min()),
+        length)

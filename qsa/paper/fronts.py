@@ -146,7 +146,9 @@ class FrontComparison(_Summarised):
         Accepted DAE steps; evaluations of the ODE's right-hand side (``nfev_ode`` is a
         read-only alias).
     dae_message, ode_message : str
-    variable_length : VariableLengthComparison
+    variable_length : VariableLengthComparison or None
+        None for the corrections on the manifold of quasi-steady profiles, which
+        hold the length fixed.
     dae_spread : DAESpread or None
         With ``reference_N``.
     """
@@ -176,7 +178,7 @@ class FrontComparison(_Summarised):
     n_rhs_ode: int
     dae_message: str
     ode_message: str
-    variable_length: VariableLengthComparison
+    variable_length: VariableLengthComparison | None
     dae_spread: DAESpread | None = None
 
     @property
@@ -210,7 +212,8 @@ class FrontComparison(_Summarised):
             "time_dae": self.time_dae, "time_ode": self.time_ode, "speedup": self.speedup,
             "n_steps_dae": self.n_steps_dae, "n_rhs_ode": self.n_rhs_ode,
             "dae_message": self.dae_message, "ode_message": self.ode_message,
-            "variable_length": self.variable_length.summary(),
+            "variable_length": (None if self.variable_length is None
+                                else self.variable_length.summary()),
         }
         if self.dae_spread is not None:
             out["dae_spread"] = self.dae_spread.summary()
@@ -247,8 +250,10 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
         converged value, far below the model error).
     fractions : tuple of float
         Fractions of the DAE collision time at which the error is reported.
-    correction : {None, "newton"}
-        Force correction of both reductions (:class:`qsa.reduction.FrontODE`).
+    correction : {None, "newton", "profile", "profile-lag"}
+        Force correction of both reductions (:class:`qsa.reduction.FrontODE`); the
+        profile manifold's (``"profile"``, ``"profile-lag"``) hold the length fixed:
+        no variable-length comparison.
     reference_N : int, optional
         Also run the DAE at this resolution and report how far its fronts are from
         the compared DAE run's (``dae_spread``: ``error_at``, ``max_error`` up to the
@@ -312,7 +317,8 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
     gaps_dae = np.min(np.abs(np.diff(np.sort(dae, axis=1), axis=1)), axis=1)
     wide = gaps_dae >= 2 * dc
     sep = before & wide
-    variable = _variable_length(sc, ref, t_final, fractions, wide, correction=correction)
+    variable = None if correction in ("profile", "profile-lag") else \
+        _variable_length(sc, ref, t_final, fractions, wide, correction=correction)
     spread = None if reference_N is None else _dae_spread(sc, int(reference_N), t_final, tol,
                                                           method, ref, fractions)
     return FrontComparison(

@@ -11,7 +11,9 @@ with its ingredients, and solves it. The contract (both backends):
 ``evaluate(p, cutoff, L, correction) -> FrontEvaluation``
     Everything, named. ``L`` is ``None`` at the fixed length, else the current length
     (then an unknown: ``(p', L')``); ``correction`` selects the Newton-corrected force
-    (:mod:`qsa.reduction.correction`).
+    (``True``, :mod:`qsa.reduction.correction`) or the manifold of quasi-steady
+    profiles (``"profile"``, ``"profile-lag"``, :mod:`qsa.reduction.quasisteady`;
+    numpy only, fixed length only).
 ``velocity(p, cutoff, L, correction) -> ndarray``
     The solution of the saddle-point system only (``p'`` [, ``L'``], then the four
     multipliers): the integrator's hot path.
@@ -42,6 +44,7 @@ from qsa.reduction.manifold import (
     normal_velocities,
     splice_fields,
 )
+from qsa.reduction.quasisteady import quasisteady_profile
 
 __all__ = ["FrontEvaluation", "NumpyBackend", "NumbaBackend", "select_backend"]
 
@@ -129,13 +132,28 @@ class NumpyBackend:
         return newton_correction(fields.psi, fields.d2psi, fields.dpsi_dp, fields.length,
                                  self.front.alpha, self.front.well, self.band)
 
+    def profile(self, fields, lag=False):
+        """:func:`~qsa.reduction.quasisteady.quasisteady_profile` of the splice ``fields``."""
+        qs = quasisteady_profile(fields, self.front.alpha, self.front.well, self.band,
+                                 self.quadrature, lag=lag)
+        if not qs.converged:
+            raise np.linalg.LinAlgError("the quasi-steady profile did not converge")
+        return qs
+
     def evaluate(self, p, cutoff, L=None, correction=False):
         """:class:`FrontEvaluation` at ``p`` (see the module docstring)."""
         f = self.fields(p, cutoff, L)
         front = self.front
+        R, lag = None, None
+        if correction in ("profile", "profile-lag"):
+            if L is not None:
+                raise ValueError(f"correction={correction!r} needs a fixed length (beta=None)")
+            qs = self.profile(f, lag=correction == "profile-lag")
+            f, R, lag = qs.fields, qs.residual, qs.lag
+        elif correction:
+            R = self.correct(f)[1]
         phi = normal_velocities(f, self.quadrature)
         G = phi.T @ (f.weights[:, None] * phi)
-        R = self.correct(f)[1] if correction else None
         dE = energy_gradient(f, front.alpha, front.well, R)
         C, J = closure(f)
         n = p.size
@@ -152,6 +170,18 @@ class NumpyBackend:
         rhs = np.zeros(n + 4)
         rhs[:n] = -dE
         sol = _solve_saddle(K, rhs)
+        if lag is not None:
+            # the lag of the fast profile behind the fronts: G p' - C p'' = -dE/dp, with
+            # p'' the acceleration of the quasi-steady flow (a directional difference)
+            v = sol[:n]
+            vmax = float(np.max(np.abs(v)))
+            if vmax > 0:
+                eps = 1e-4 * self.front.width / vmax
+                vp = self.evaluate(p + eps * v, cutoff, None, "profile").velocity
+                vm = self.evaluate(p - eps * v, cutoff, None, "profile").velocity
+                dE = dE - lag @ ((vp - vm) / (2 * eps))
+                rhs[:n] = -dE
+                sol = _solve_saddle(K, rhs)
         return FrontEvaluation(sol[:n], sol[n:], phi, f.weights, G, dE, C, J, K, rhs)
 
     def velocity(self, p, cutoff, L=None, correction=False):

@@ -179,6 +179,21 @@ class PeriodicQuadrature:
         return out, Q - Q[0] - P1[0] * s + 0.5 * mt * s**2
 
 
+    def cumulative_transpose(self, Y):
+        """The transpose of :meth:`cumulative` (as a linear map of the columns), shape (M, n).
+
+        ``y . cumulative(F) = cumulative_transpose(y) . F`` for all ``F``: the exact
+        gradient of a functional of the cumulative integrals on the nodes.
+        """
+        M = Y.shape[0]
+        Yh = np.fft.rfft(Y, axis=0) * np.conj(self._inv_ik)
+        Pt = np.fft.irfft(Yh, n=M, axis=0)  # transpose of the periodic part
+        e0 = np.zeros((M, 1))
+        e0[0] = 1.0
+        P0 = np.fft.irfft(np.fft.rfft(e0, axis=0) * np.conj(self._inv_ik), n=M, axis=0)
+        return Pt - P0 * Y.sum(axis=0) + (self.grid.s @ Y) / M
+
+
 @dataclass(frozen=True, eq=False)
 class SpliceFields:
     """The splice ``psi_N(p)`` and what the reduction needs of it, on ``sigma_i = L s_i``.
@@ -199,6 +214,8 @@ class SpliceFields:
         ``L``.
     s : ndarray, shape (M,)
         Nodes on ``[0, 1)``.
+    d2psi_dp2 : ndarray, shape (M, 2N), or None
+        ``d^2 psi_N / d p_j^2`` (each front's own second derivative).
     g_L, dg_L, Theta_L : ndarray, shape (M,), or None
         Variable length only: ``g_L = d psi_N/dL + (sigma/L) psi_N'`` (smooth and
         periodic; ``d/dL`` at fixed ``p``), its derivative in ``sigma`` and
@@ -214,6 +231,7 @@ class SpliceFields:
     Theta: np.ndarray
     length: float
     s: np.ndarray
+    d2psi_dp2: np.ndarray | None = None
     g_L: np.ndarray | None = None
     dg_L: np.ndarray | None = None
     Theta_L: np.ndarray | None = None
@@ -265,7 +283,7 @@ def splice_fields(front, positions, length, cutoff, quadrature, variable=False):
     dpsi = -sgn * v1
     w = L * quadrature.weights
     common = {"psi": psi, "dpsi": d1, "d2psi": d2, "dpsi_dp": dpsi, "weights": w,
-              "length": L, "s": quadrature.s}
+              "length": L, "s": quadrature.s, "d2psi_dp2": sgn * v2}
     if not variable:
         cum = L * quadrature.cumulative(np.column_stack([psi, dpsi]))
         return SpliceFields(theta=cum[:, 0], Theta=cum[:, 1:], **common)

@@ -45,6 +45,18 @@ correction the collision time is within 1% of the DAE's (N = 600; variable lengt
 against beta = 5, fixed length against a stiff perimeter), without it the fixed-length
 one is more than 1.5% off.
 
+*The quasi-steady manifold.* ``correction="profile"`` replaces the splice by the
+profile that solves the profile equation up to a force along the reduced tangent
+space and the three closure multipliers (:mod:`qsa.reduction.quasisteady`), and
+evaluates metric, closure and force on it. It contains the exact N-pulse of a
+regular polygon, whose plateaus the turning multiplier lifts, so the reduction's
+linearization there is the Rayleigh-Ritz approximation of the full one on the
+manifold's tangent space; ``"profile-lag"`` adds the lag of the profile behind the
+fronts (``G p' - C p'' = -dE/dp``), which is what is left for corners of 0.16-0.2:
+the slow eigenvalues of the regular polygons with 3-8 corners and facets 0.25-0.5
+agree with the full linearization's within 0.35% (the front-ODE page of the
+documentation).
+
 *Collisions and validity* are in :mod:`qsa.reduction.integrate` (:meth:`integrate`).
 The measured accuracy (against the DAE flow) and cost are on the front-ODE page of the
 documentation and in the output of ``benchmarks/bench_reduction.py``.
@@ -102,11 +114,17 @@ class FrontODE:
         unknown (state ``(p, L)``, see "Variable length" in the module docstring).
     L_star : float, optional
         Preferred length (default ``length``).
-    correction : {None, "newton"}
+    correction : {None, "newton", "profile", "profile-lag"}
         ``"newton"``: evaluate the force ``dE/dp_j`` with the residual of the profile
         corrected by one Newton step towards the slow manifold
         (:meth:`slow_correction`) instead of the splice's own residual; one banded
-        solve of size ``M`` (quadrature nodes) per evaluation.
+        solve of size ``M`` (quadrature nodes) per evaluation. ``"profile"``: the
+        reduction on the manifold of constrained quasi-steady profiles
+        (:mod:`qsa.reduction.quasisteady`: metric, force and closure of the profile
+        converged by Newton, 3-5 banded solves per evaluation); ``"profile-lag"``: the
+        same with the lag of the profile behind moving fronts (three such
+        evaluations). Both need the fixed length (``beta=None``) and run on numpy
+        (``backend="auto"`` picks it; ``"numba"`` is refused).
     backend : {"auto", "numpy", "numba"}
         Evaluation of the right-hand side (:mod:`qsa.reduction.backends`). ``"numpy"``:
         the reference (spectral cumulative integrals). ``"numba"``: one compiled kernel
@@ -159,12 +177,22 @@ class FrontODE:
             raise ValueError(f"beta must be non-negative, got {self.beta!r}")
         if self.L_star is None:
             object.__setattr__(self, "L_star", float(self.length))
-        if self.correction not in (None, "newton"):
-            raise ValueError(f"correction must be None or 'newton', got {self.correction!r}")
+        if self.correction not in (None, "newton", "profile", "profile-lag"):
+            raise ValueError(f"correction must be None, 'newton', 'profile' or 'profile-lag', "
+                             f"got {self.correction!r}")
         ref = NumpyBackend(front, self.length, quad, folded_band(quad.M, D2_STENCIL),
                            self.beta, self.L_star)
         object.__setattr__(self, "_reference", ref)
-        object.__setattr__(self, "_evaluator", select_backend(self.backend, ref))
+        if self.correction in ("profile", "profile-lag"):
+            if self.beta is not None:
+                raise ValueError(f"correction={self.correction!r} needs a fixed length: "
+                                 f"pass beta=None")
+            if self.backend == "numba":
+                raise ValueError(f"backend='numba' supports correction None or 'newton'; use "
+                                 f"backend='numpy' or 'auto' with correction={self.correction!r}")
+            object.__setattr__(self, "_evaluator", select_backend("numpy", ref))
+        else:
+            object.__setattr__(self, "_evaluator", select_backend(self.backend, ref))
 
     @property
     def backend_used(self):
@@ -225,12 +253,14 @@ class FrontODE:
         """The reduced system at ``p`` (and length ``L``, needs ``beta``), all named.
 
         ``L``: the current length of the variable-length reduction (default: the fixed
-        length); ``correction``: the Newton-corrected force (default: as the ODE's).
+        length); ``correction``: ``False``/``True`` (the Newton-corrected force),
+        ``"profile"`` or ``"profile-lag"`` (numpy; default: as the ODE's).
         Returns a :class:`qsa.reduction.backends.FrontEvaluation`.
         """
         p = self._check(p) if L is None else self._check_length(p, L)
-        corr = self.correction == "newton" if correction is None else bool(correction)
-        return self._evaluator.evaluate(p, self._cut(p, cutoff, L), L, corr)
+        corr = self._corr if correction is None else correction
+        ev = self._reference if isinstance(corr, str) else self._evaluator
+        return ev.evaluate(p, self._cut(p, cutoff, L), L, corr)
 
     def _plain(self, p, cutoff):
         """Uncorrected evaluation at the fixed length, without input checks."""
@@ -294,8 +324,12 @@ class FrontODE:
         v = self._solve(p, self._cut(p, cutoff, L), float(L))
         return v[:p.size], float(v[p.size])
 
+    @property
+    def _corr(self):
+        return {None: False, "newton": True}.get(self.correction, self.correction)
+
     def _solve(self, p, cut, L):
-        return self._evaluator.velocity(p, cut, L, self.correction == "newton")
+        return self._evaluator.velocity(p, cut, L, self._corr)
 
     def rhs(self, y, cutoff):
         """``p'`` (or ``(p', L')`` with ``beta``) at the state ``y = p`` (or ``(p, L)``).
@@ -311,7 +345,7 @@ class FrontODE:
     def tangent_basis(self, p, cutoff=None):
         """Orthonormal basis of ``{dC/dp . q = 0, sum q = 0}``, shape (2N, 2N - 4)."""
         p = self._check(p)
-        _, J = self.constraints(p, cutoff)
+        J = self.evaluate(p, cutoff).closure_jacobian  # of the ODE's own manifold
         A = np.vstack([J, np.ones((1, p.size))])
         _, _, Vt = np.linalg.svd(A)
         return Vt[4:].T

@@ -100,3 +100,11 @@ def test_no_collision_before_t_final():
     assert (s["alpha"], s["kstar"], s["beta"]) == (0.1, 5.0, 5.0)
     assert np.isnan(s["collision_dae"]) and np.isnan(s["collision_ode"])
     assert np.isfinite(s["max_error"]) and s["max_error"] < 0.05
+
+
+def test_profile_manifold_reduction_against_the_dae():
+    """The quasi-steady profiles hold the length fixed: no variable-length comparison."""
+    c = compare_fronts("short-facet", N=400, correction="profile")
+    s = c.summary()
+    assert c.variable_length is None and s["variable_length"] is None
+    assert s["correction"] == "profile" and c.collision_rel_diff < 0.03
