@@ -123,8 +123,9 @@ class FrontODE:
         (:mod:`qsa.reduction.quasisteady`: metric, force and closure of the profile
         converged by Newton, 3-5 banded solves per evaluation); ``"profile-lag"``: the
         same with the lag of the profile behind moving fronts (three such
-        evaluations). Both need the fixed length (``beta=None``) and run on numpy
-        (``backend="auto"`` picks it; ``"numba"`` is refused).
+        evaluations). Both run on numpy (``backend="auto"`` picks it; ``"numba"`` is
+        refused); with ``beta`` the length is an unknown of the profile too (its
+        tangent in ``L``, :mod:`qsa.reduction.quasisteady`).
     backend : {"auto", "numpy", "numba"}
         Evaluation of the right-hand side (:mod:`qsa.reduction.backends`). ``"numpy"``:
         the reference (spectral cumulative integrals). ``"numba"``: one compiled kernel
@@ -184,9 +185,6 @@ class FrontODE:
                            self.beta, self.L_star)
         object.__setattr__(self, "_reference", ref)
         if self.correction in ("profile", "profile-lag"):
-            if self.beta is not None:
-                raise ValueError(f"correction={self.correction!r} needs a fixed length: "
-                                 f"pass beta=None")
             if self.backend == "numba":
                 raise ValueError(f"backend='numba' supports correction None or 'newton'; use "
                                  f"backend='numpy' or 'auto' with correction={self.correction!r}")
