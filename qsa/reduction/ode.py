@@ -340,16 +340,27 @@ class FrontODE:
         return self._solve(y[:-1], cutoff, y[-1])[:y.size]
 
     # ---- linearization
-    def tangent_basis(self, p, cutoff=None):
-        """Orthonormal basis of ``{dC/dp . q = 0, sum q = 0}``, shape (2N, 2N - 4)."""
-        p = self._check(p)
-        J = self.evaluate(p, cutoff).closure_jacobian  # of the ODE's own manifold
-        A = np.vstack([J, np.ones((1, p.size))])
+    def tangent_basis(self, p, cutoff=None, L=None):
+        """Orthonormal basis of the tangent space of the closure and the base point.
+
+        ``{dC/dp . q = 0, sum q = 0}``, shape (2N, 2N - 4); with ``L`` (a variable
+        length, needs ``beta``) of ``{dC/dp . q + dC/dL l = 0, sum q = 0}`` in the
+        state ``(q, l)``, shape (2N + 1, 2N - 3).
+        """
+        p = self._check(p) if L is None else self._check_length(p, L)
+        e = self.evaluate(p, cutoff, L)  # the closure of the ODE's own manifold
+        n = e.velocity.size
+        A = np.zeros((4, n))
+        A[:3] = e.matrix[n:n + 3, :n]
+        A[3, :p.size] = 1.0
         _, _, Vt = np.linalg.svd(A)
         return Vt[4:].T
 
-    def jacobian(self, p, cutoff=None, step=None):
+    def jacobian(self, p, cutoff=None, step=None, L=None):
         """``dF/dp`` by central differences, shape (2N, 2N), and the tangent-space block.
+
+        With ``L`` (needs ``beta``): the Jacobian of ``(p', L')`` in ``(p, L)``, shape
+        (2N + 1, 2N + 1), and its block on the length-free tangent space.
 
         Returns
         -------
@@ -357,23 +368,29 @@ class FrontODE:
         J_T : ndarray, shape (2N - 4, 2N - 4)
             ``T^T J T`` with ``T`` = :meth:`tangent_basis`: the linearization of the
             reduced flow on the splice manifold; its eigenvalues are the slow
-            eigenvalues of the faceting flow at the splice.
+            eigenvalues of the faceting flow at the splice (with ``L``: 2N - 3, the
+            perimeter mode among them).
         """
-        p = self._check(p)
-        cut = self._cut(p, cutoff)
+        p = self._check(p) if L is None else self._check_length(p, L)
+        cut = self._cut(p, cutoff, L)
         h = 1e-3 * self.front.width if step is None else float(step)
-        n = p.size
+        if L is None:
+            y, F = p, (lambda y: self.velocity(y, cut))
+        else:
+            y = np.append(p, float(L))
+            F = (lambda y: np.append(*self.velocity_length(y[:-1], y[-1], cut)))
+        n = y.size
         J = np.empty((n, n))
         for j in range(n):
             e = np.zeros(n)
             e[j] = h
-            J[:, j] = (self.velocity(p + e, cut) - self.velocity(p - e, cut)) / (2 * h)
-        T = self.tangent_basis(p, cut)
+            J[:, j] = (F(y + e) - F(y - e)) / (2 * h)
+        T = self.tangent_basis(p, cut, L)
         return J, T.T @ J @ T
 
-    def eigenvalues(self, p, cutoff=None):
+    def eigenvalues(self, p, cutoff=None, L=None):
         """Eigenvalues of the tangent-space Jacobian (sorted by real part, descending)."""
-        ev = np.linalg.eigvals(self.jacobian(p, cutoff)[1])
+        ev = np.linalg.eigvals(self.jacobian(p, cutoff, L=L)[1])
         return ev[np.argsort(-ev.real)]
 
     def crossings(self, p, cutoff=None):
