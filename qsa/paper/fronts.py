@@ -147,8 +147,8 @@ class FrontComparison(_Summarised):
         read-only alias).
     dae_message, ode_message : str
     variable_length : VariableLengthComparison or None
-        None for the corrections on the manifold of quasi-steady profiles, which
-        hold the length fixed.
+        The same for the reduction with the length as an unknown (``beta`` of the
+        scenario).
     dae_spread : DAESpread or None
         With ``reference_N``.
     """
