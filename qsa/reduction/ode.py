@@ -34,7 +34,9 @@ the curve: it costs no dissipation, but it changes ``C`` and ``E``
 the closure rows and the saddle-point system gains one unknown and one row:
 ``dC/dL L' + dC/dp p' = 0`` and ``(dC/dL) . mu = -(dE/dL + beta (L - L*))``. At the
 quasi-static length (``L' = 0``) of a stiff perimeter it reduces to the fixed-length
-flow (tested).
+flow (tested). On the manifold of quasi-steady profiles (below) lengthening does move
+the curve -- the profile changes everywhere with ``L`` -- and the length has its own
+normal velocity, metric row and column (:mod:`qsa.reduction.quasisteady`).
 
 *Force correction.* ``correction="newton"`` evaluates the force with the residual of
 the splice corrected by one Newton step towards the slow manifold
