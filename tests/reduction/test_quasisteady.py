@@ -287,6 +287,15 @@ def test_variable_length_force_is_the_derivative_of_the_energy(triangle):
     assert abs(w[1] - v[-1]) < 0.01 * abs(v[-1])  # the lag is small away from rest
 
 
+def test_variable_length_lag_matrix_has_the_length_row(octagon):
+    """With the length the lag matrix gains its row and column (``phi_L``), symmetric
+    and positive semi-definite, ``C_LL > 0``."""
+    ode, p, cut = octagon
+    C = _profile_at(ode, p, ode.length, cut, length=True, lag=True).lag
+    assert C.shape == (p.size + 1, p.size + 1) and C[-1, -1] > 0
+    assert np.allclose(C, C.T) and np.linalg.eigvalsh(C).min() > -1e-12 * np.abs(C).max()
+
+
 def test_variable_length_rest_point_is_the_polished_n_pulse():
     """On the octagon the length-free reduction rests at the N-pulse's length (the
     perimeter penalty against the lifted plateaus: 1.66e-3 longer than the splice;
