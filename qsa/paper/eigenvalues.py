@@ -55,7 +55,8 @@ class EigenvalueComparison(_Summarised):
     ----------
     scenario : Scenario
     reduced : ndarray, shape (2n - 4,)
-        Slow eigenvalues of the reduced Jacobian, sorted descending.
+        Slow eigenvalues of the reduced Jacobian, sorted descending (``2n - 3`` with
+        ``variable_length``: the perimeter mode too; so the arrays below).
     full : ndarray, shape (2n - 4,)
         The full eigenvalue paired with each reduced one (by eigenvector overlap).
     full_errors : ndarray, shape (2n - 4,)
