@@ -299,7 +299,8 @@ def test_variable_length_lag_matrix_has_the_length_row(octagon):
 def test_variable_length_rest_point_is_the_polished_n_pulse():
     """On the octagon the length-free reduction rests at the N-pulse's length (the
     perimeter penalty against the lifted plateaus: 1.66e-3 longer than the splice;
-    agreement 2e-13 measured), where the splice manifold's rest point is 5e-4 shorter."""
+    agreement 2e-13 measured), where the splice manifold rests 5e-4 below the splice's
+    length, 2.2e-3 below the N-pulse's."""
     n, facet, beta = 8, 0.35, 5.0
     p0, L0, cut = _regular(n, facet)
     ode = FrontODE(ALPHA, KSTAR, L0, beta=beta, correction="profile")
