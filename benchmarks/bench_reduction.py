@@ -4,8 +4,8 @@ For each scenario of ``qsa reproduce fronts`` the DAE (``solve_flow``, BDF2, tol
 stopped at the first pair annihilation; run through
 :func:`qsa.paper.compare_fronts`) at each resolution N, and the four
 reductions (force correction none / newton, fixed length / variable length with
-beta = 5) and the two on the manifold of quasi-steady profiles (``profile``,
-``profile-lag``: fixed length, numpy only) stopped at their first collision, with the
+beta = 5) and the four on the manifold of quasi-steady profiles (``profile``,
+``profile-lag``, fixed / variable length, numpy only) stopped at their first collision, with the
 settings of ``compare_fronts``
 (rtol 1e-4, ``method="auto"``: RK45, or Radau for a stiff perimeter mode), each with both
 right-hand-side backends (``numpy``, the reference, and the compiled ``numba`` kernel
@@ -35,7 +35,8 @@ from qsa.paper import SCENARIOS, compare_fronts
 from qsa.reduction import FrontODE
 
 VARIANTS = [(None, False), ("newton", False), (None, True), ("newton", True),
-            ("profile", False), ("profile-lag", False)]
+            ("profile", False), ("profile-lag", False), ("profile", True),
+            ("profile-lag", True)]
 
 
 def backends(correction=None):

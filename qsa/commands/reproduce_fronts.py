@@ -58,8 +58,8 @@ def add_arguments(parser):
                              "Newton step towards the slow manifold (newton; removes most "
                              "of the rate error of a closing facet; ~1.3x the uncorrected "
                              "ODE's CPU time), or the manifold of quasi-steady profiles "
-                             "without or with the lag (profile, profile-lag; fixed length "
-                             "only, numpy; ~4x and ~10x newton's CPU time)")
+                             "without or with the lag (profile, profile-lag; numpy; ~4x "
+                             "and ~10x newton's CPU time)")
     parser.add_argument("--dae-check", type=int_at_least(50), metavar="N2", default=None,
                         help="also run the DAE at N2 nodes (e.g. N/2) and report how far its "
                              "fronts are from the N run: the reference's own spread")

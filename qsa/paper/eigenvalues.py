@@ -31,6 +31,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import newton
 
 from qsa import Fourier
 from qsa.equilibria import default_cutoff, heteroclinic
@@ -54,7 +55,8 @@ class EigenvalueComparison(_Summarised):
     ----------
     scenario : Scenario
     reduced : ndarray, shape (2n - 4,)
-        Slow eigenvalues of the reduced Jacobian, sorted descending.
+        Slow eigenvalues of the reduced Jacobian, sorted descending (``2n - 3`` with
+        ``variable_length``: the perimeter mode too; so the arrays below).
     full : ndarray, shape (2n - 4,)
         The full eigenvalue paired with each reduced one (by eigenvector overlap).
     full_errors : ndarray, shape (2n - 4,)
@@ -88,6 +90,15 @@ class EigenvalueComparison(_Summarised):
         Smallest facet of the splice.
     length : str
         Where the reduction was linearized (``"splice"`` or ``"equilibrium"``).
+    variable_length : bool
+        The reduction had the length as an unknown (its perimeter mode is the
+        extra pair).
+    length_offset : float
+        Length of the reduction's linearization point minus the polished
+        equilibrium's (NaN without polishing).
+    perimeter_index : int
+        With ``variable_length``: the index of the perimeter mode among the reduced
+        ones (the largest change of length per front displacement); else -1.
     """
 
     scenario: Scenario
@@ -108,6 +119,9 @@ class EigenvalueComparison(_Summarised):
     correction: str | None
     min_facet: float
     length: str = "splice"
+    variable_length: bool = False
+    length_offset: float = np.nan
+    perimeter_index: int = -1
 
     @property
     def n_corners(self):
@@ -131,7 +145,8 @@ class EigenvalueComparison(_Summarised):
                 "polish_residual": self.polish_residual,
                 "polish_success": self.polish_success,
                 "spectrum_status": self.spectrum_status, "N": self.N, "pairing": "overlap",
-                "length": self.length}
+                "length": self.length, "variable_length": self.variable_length,
+                "length_offset": self.length_offset, "perimeter_index": self.perimeter_index}
 
 
 def polygon_scenario(n_corners, facet=0.35, angles=None, facets=None):
@@ -155,7 +170,7 @@ def _is_regular(sc):
 
 def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, angles=None,
                         facets=None, *, correction=None, polish=None, extra=None, rtol=1e-4,
-                        length="splice"):
+                        length="splice", variable_length=False):
     """Slow eigenvalues of the reduced Jacobian against the full linearization, paired by mode.
 
     Parameters
@@ -189,7 +204,14 @@ def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, 
         full spectrum -- the regular splice of the polished N-pulse's length (the
         perimeter penalty lets the overlapping corners lengthen the curve: the
         octagon with facets 0.35 by 1.7e-3, which moves its facet eigenvalues by
-        0.7%).
+        0.7%). With ``variable_length`` on a regular polygon ``"splice"`` is the
+        reduction's own rest point: the regular splice of the length where
+        ``L' = 0`` (on the profile manifold the N-pulse's length;
+        :attr:`EigenvalueComparison.length_offset`).
+    variable_length : bool
+        Linearize the reduction with the length as an unknown
+        (``FrontODE(beta=scenario.beta)``, the full problem's perimeter penalty):
+        ``2n - 3`` reduced modes, the perimeter mode among them, all paired.
 
     Returns
     -------
@@ -224,13 +246,18 @@ def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, 
         pol = polish_curve(eq.energy, eq.curve)
         curve, energy = pol.curve, pol.energy
         pol_res, pol_ok = float(pol.residual), bool(pol.success)
+    L_star, L_full = L, (curve.length() if do_polish else np.nan)
     if length == "equilibrium":
-        n_c = len(sc.angles)
-        facets_eq = np.asarray(sc.facets) + (curve.length() - L) / n_c
-        p, L = polygon_positions(np.deg2rad(sc.angles), facets_eq, sc.kstar)
+        p, L = _regular_splice(sc, L_full - L_star)
         cut = default_cutoff(p, L)
-    ode = FrontODE(sc.alpha, sc.kstar, L, correction=correction)
-    red = reduced_modes(ode, p, cut)
+    if variable_length:  # the perimeter penalty of the full problem, L* the splice's
+        ode = FrontODE(sc.alpha, sc.kstar, L_star, correction=correction, beta=sc.beta)
+        if length == "splice" and _is_regular(sc):
+            p, L = _regular_splice(sc, _rest_length(ode, sc, cut))
+        red = reduced_modes(ode, p, cut, L)
+    else:
+        ode = FrontODE(sc.alpha, sc.kstar, L, correction=correction)
+        red = reduced_modes(ode, p, cut)
     m = red.eigenvalues.size
     k = m + 3 + (2 * len(sc.angles) if extra is None else int(extra))
     with warnings.catch_warnings():
@@ -254,4 +281,25 @@ def compare_eigenvalues(scenario=3, facet=0.35, alpha=None, kstar=None, N=None, 
         sc, red.eigenvalues, full, err[pairing.index], rel, pairing.cosine, pairing.capture,
         np.sort(spec.eigenvalues[kern]), np.sort(lam)[::-1], float(rel.max()), do_polish,
         pol_res, pol_ok, int(spec.status), int(N), correction, float(gaps[1::2].min()),
-        length)
+        length, bool(variable_length), float(L - L_full),
+        int(np.argmax(np.abs(red.displacements[-1]))) if variable_length else -1)
+
+
+def _regular_splice(sc, dL):
+    """Positions and length of the scenario's polygon with every facet longer by dL / n."""
+    n = len(sc.angles)
+    return polygon_positions(np.deg2rad(sc.angles), np.asarray(sc.facets) + dL / n, sc.kstar)
+
+
+def _rest_length(ode, sc, cut):
+    """``L - L*`` where the variable-length reduction rests on the regular polygon.
+
+    By symmetry ``p' = 0`` on the regular splices; ``L'`` is a smooth function of
+    their length, whose root the secant method finds (to ~1e-14 of ``L``).
+    """
+    def rate(dL):
+        p, L = _regular_splice(sc, dL)
+        return ode.velocity_length(p, L, cut)[1]
+
+    return float(newton(rate, 0.0, x1=1e-4 * ode.length, tol=1e-14 * ode.length,
+                        maxiter=50))

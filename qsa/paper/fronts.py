@@ -147,8 +147,8 @@ class FrontComparison(_Summarised):
         read-only alias).
     dae_message, ode_message : str
     variable_length : VariableLengthComparison or None
-        None for the corrections on the manifold of quasi-steady profiles, which
-        hold the length fixed.
+        The same for the reduction with the length as an unknown (``beta`` of the
+        scenario).
     dae_spread : DAESpread or None
         With ``reference_N``.
     """
@@ -251,9 +251,8 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
     fractions : tuple of float
         Fractions of the DAE collision time at which the error is reported.
     correction : {None, "newton", "profile", "profile-lag"}
-        Force correction of both reductions (:class:`qsa.reduction.FrontODE`); the
-        profile manifold's (``"profile"``, ``"profile-lag"``) hold the length fixed:
-        no variable-length comparison.
+        Force correction (or manifold) of both reductions, fixed and variable
+        length (:class:`qsa.reduction.FrontODE`).
     reference_N : int, optional
         Also run the DAE at this resolution and report how far its fronts are from
         the compared DAE run's (``dae_spread``: ``error_at``, ``max_error`` up to the
@@ -317,8 +316,7 @@ def compare_fronts(scenario="triangle", *, N=1200, t_final=None, tol=1e-6, metho
     gaps_dae = np.min(np.abs(np.diff(np.sort(dae, axis=1), axis=1)), axis=1)
     wide = gaps_dae >= 2 * dc
     sep = before & wide
-    variable = None if correction in ("profile", "profile-lag") else \
-        _variable_length(sc, ref, t_final, fractions, wide, correction=correction)
+    variable = _variable_length(sc, ref, t_final, fractions, wide, correction=correction)
     spread = None if reference_N is None else _dae_spread(sc, int(reference_N), t_final, tol,
                                                           method, ref, fractions)
     return FrontComparison(

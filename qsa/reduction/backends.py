@@ -13,7 +13,7 @@ with its ingredients, and solves it. The contract (both backends):
     (then an unknown: ``(p', L')``); ``correction`` selects the Newton-corrected force
     (``True``, :mod:`qsa.reduction.correction`) or the manifold of quasi-steady
     profiles (``"profile"``, ``"profile-lag"``, :mod:`qsa.reduction.quasisteady`;
-    numpy only, fixed length only).
+    numpy only).
 ``velocity(p, cutoff, L, correction) -> ndarray``
     The solution of the saddle-point system only (``p'`` [, ``L'``], then the four
     multipliers): the integrator's hot path.
@@ -44,7 +44,7 @@ from qsa.reduction.manifold import (
     normal_velocities,
     splice_fields,
 )
-from qsa.reduction.quasisteady import quasisteady_profile
+from qsa.reduction.quasisteady import profile_normal_velocities, quasisteady_profile
 
 __all__ = ["FrontEvaluation", "NumpyBackend", "NumbaBackend", "select_backend"]
 
@@ -60,11 +60,15 @@ class FrontEvaluation:
     multipliers : ndarray, shape (4,)
         ``mu`` of the closure constraints (three) and of the base point.
     normal_velocities : ndarray, shape (M, 2N)
-        ``phi_j^perp`` on the quadrature nodes.
+        ``phi_j^perp`` on the quadrature nodes; on the profile manifold with a
+        variable length also ``phi_L^perp`` (shape (M, 2N + 1)): there lengthening
+        the curve at fixed ``p`` changes its profile everywhere.
     weights : ndarray, shape (M,)
         Quadrature weights ``dsigma``.
     metric : ndarray, shape (n, n)
-        ``G`` (the length row and column are zero: lengthening costs no dissipation).
+        ``G`` (on the splice manifold the length row and column are zero: lengthening
+        moves no point of the curve and costs no dissipation; on the profile manifold
+        they are those of ``phi_L^perp``).
     force : ndarray, shape (n,)
         ``dE/dp`` (Newton-corrected if asked; and ``dE/dL + beta (L - L*)``).
     closure : ndarray, shape (3,)
@@ -132,10 +136,10 @@ class NumpyBackend:
         return newton_correction(fields.psi, fields.d2psi, fields.dpsi_dp, fields.length,
                                  self.front.alpha, self.front.well, self.band)
 
-    def profile(self, fields, lag=False):
+    def profile(self, fields, lag=False, length=False):
         """:func:`~qsa.reduction.quasisteady.quasisteady_profile` of the splice ``fields``."""
         qs = quasisteady_profile(fields, self.front.alpha, self.front.well, self.band,
-                                 self.quadrature, lag=lag)
+                                 self.quadrature, lag=lag, length=length)
         if not qs.converged:
             raise np.linalg.LinAlgError("the quasi-steady profile did not converge")
         return qs
@@ -145,14 +149,16 @@ class NumpyBackend:
         f = self.fields(p, cutoff, L)
         front = self.front
         R, lag = None, None
-        if correction in ("profile", "profile-lag"):
-            if L is not None:
-                raise ValueError(f"correction={correction!r} needs a fixed length (beta=None)")
-            qs = self.profile(f, lag=correction == "profile-lag")
+        on_profile = correction in ("profile", "profile-lag")
+        if on_profile:
+            qs = self.profile(f, lag=correction == "profile-lag", length=L is not None)
             f, R, lag = qs.fields, qs.residual, qs.lag
-        elif correction:
-            R = self.correct(f)[1]
-        phi = normal_velocities(f, self.quadrature)
+            # with a variable length the profile moves the curve as L changes: phi_L
+            phi = profile_normal_velocities(f, self.quadrature)
+        else:
+            if correction:
+                R = self.correct(f)[1]
+            phi = normal_velocities(f, self.quadrature)
         G = phi.T @ (f.weights[:, None] * phi)
         dE = energy_gradient(f, front.alpha, front.well, R)
         C, J = closure(f)
@@ -161,7 +167,8 @@ class NumpyBackend:
         if L is not None:
             dEL, dCL = length_derivatives(f, front.alpha, front.well)
             dEL += self.beta * (L - self.L_star)
-            G = np.pad(G, ((0, 1), (0, 1)))
+            if not on_profile:  # the splice's lengthening moves no point of the curve
+                G = np.pad(G, ((0, 1), (0, 1)))
             dE = np.append(dE, dEL)
             A = np.column_stack([A, np.append(dCL, 0.0)])
             n += 1
@@ -177,12 +184,17 @@ class NumpyBackend:
             vmax = float(np.max(np.abs(v)))
             if vmax > 0:
                 eps = 1e-4 * self.front.width / vmax
-                vp = self.evaluate(p + eps * v, cutoff, None, "profile").velocity
-                vm = self.evaluate(p - eps * v, cutoff, None, "profile").velocity
+                vp, vm = (self._shifted(p, L, d * v, cutoff) for d in (eps, -eps))
                 dE = dE - lag @ ((vp - vm) / (2 * eps))
                 rhs[:n] = -dE
                 sol = _solve_saddle(K, rhs)
         return FrontEvaluation(sol[:n], sol[n:], phi, f.weights, G, dE, C, J, K, rhs)
+
+    def _shifted(self, p, L, dy, cutoff):
+        """The ``"profile"`` velocity at the state ``(p [, L]) + dy``."""
+        if L is None:
+            return self.evaluate(p + dy, cutoff, None, "profile").velocity
+        return self.evaluate(p + dy[:-1], cutoff, L + dy[-1], "profile").velocity
 
     def velocity(self, p, cutoff, L=None, correction=False):
         """The saddle-point solution ``(p' [, L'], mu)``, shape (n + 4,)."""

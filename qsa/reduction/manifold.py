@@ -220,6 +220,9 @@ class SpliceFields:
         Variable length only: ``g_L = d psi_N/dL + (sigma/L) psi_N'`` (smooth and
         periodic; ``d/dL`` at fixed ``p``), its derivative in ``sigma`` and
         ``int_0^sigma d psi_N/dL``.
+    dpsi_dp_L : ndarray, shape (M, 2N), or None
+        Variable length only: ``d/dL`` of ``dpsi_dp`` on the nodes (at fixed ``s``,
+        like ``g_L``; smooth and periodic).
     """
 
     psi: np.ndarray
@@ -235,6 +238,7 @@ class SpliceFields:
     g_L: np.ndarray | None = None
     dg_L: np.ndarray | None = None
     Theta_L: np.ndarray | None = None
+    dpsi_dp_L: np.ndarray | None = None
 
 
 def splice_fields(front, positions, length, cutoff, quadrature, variable=False):
@@ -298,7 +302,10 @@ def splice_fields(front, positions, length, cutoff, quadrature, variable=False):
     cum = L * quadrature.cumulative(F)
     theta, Theta = cum[:, 0], cum[:, 1:-1]
     Theta_L = cum[:, -1] - x * psi + theta / L  # int_0^sigma psi_L, pointwise
-    return SpliceFields(theta=theta, Theta=Theta, g_L=g, dg_L=dg, Theta_L=Theta_L, **common)
+    # d/dL at fixed s of -sgn v1(y +- a): -sgn v2 (s - image index)
+    dP_L = k * v2 - x[:, None] * common["d2psi_dp2"]
+    return SpliceFields(theta=theta, Theta=Theta, g_L=g, dg_L=dg, Theta_L=Theta_L,
+                        dpsi_dp_L=dP_L, **common)
 
 
 def normal_velocities(fields, quadrature):

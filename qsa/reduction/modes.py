@@ -53,10 +53,12 @@ class ReducedModes:
     Attributes
     ----------
     eigenvalues : ndarray, shape (m,)
-        ``m = 2N - 4`` (fixed length), sorted by real part, descending.
+        ``m = 2N - 4`` (fixed length; ``2N - 3`` with a variable length), sorted by
+        real part, descending.
     displacements : ndarray, shape (2N, m)
         Front displacements ``q = T y`` of the eigenvectors ``y`` of ``T^T J T``
-        (:meth:`FrontODE.tangent_basis`), unit Euclidean norm.
+        (:meth:`FrontODE.tangent_basis`), unit Euclidean norm (with a variable
+        length shape (2N + 1, m), the change of length last).
     normals : ndarray, shape (M, m)
         Their normal perturbations ``phi(q)`` on the ODE's quadrature nodes
         (:func:`normal_modes`), unit ``L^2(dsigma)`` norm.
@@ -93,7 +95,7 @@ class ModePairing:
     cosines: np.ndarray
 
 
-def normal_modes(ode, p, q, cutoff=None):
+def normal_modes(ode, p, q, cutoff=None, L=None):
     """Normal perturbations ``phi(q) = sum_j q_j phi_j^perp`` on the ODE's nodes, (M, k).
 
     Parameters
@@ -101,8 +103,12 @@ def normal_modes(ode, p, q, cutoff=None):
     ode : FrontODE
     p : array_like, shape (2N,)
     q : array_like, shape (2N,) or (2N, k)
-        Front displacements.
+        Front displacements; with ``L`` (a variable length) shape (2N + 1, ...), the
+        change of length last (``phi_L^perp``, zero on the splice manifold, whose
+        lengthening moves no point of the curve).
     cutoff : (float, float), optional
+    L : float, optional
+        The length of the variable-length reduction.
 
     Returns
     -------
@@ -111,19 +117,28 @@ def normal_modes(ode, p, q, cutoff=None):
     weights : ndarray, shape (M,)
         ``dsigma``.
     """
-    phi, w = ode.normal_velocities(p, cutoff)
-    return phi @ np.asarray(q, dtype=float).reshape(phi.shape[1], -1), w
+    q = np.asarray(q, dtype=float)
+    if L is None:
+        phi, w = ode.normal_velocities(p, cutoff)
+        return phi @ q.reshape(phi.shape[1], -1), w
+    e = ode.evaluate(p, cutoff, L)
+    q = q.reshape(np.size(p) + 1, -1)
+    return e.normal_velocities @ q[:e.normal_velocities.shape[1]], e.weights
 
 
-def reduced_modes(ode, p, cutoff=None):
+def reduced_modes(ode, p, cutoff=None, L=None):
     """Eigenvalues, front displacements and normal perturbations of the reduced Jacobian.
 
     Parameters
     ----------
     ode : FrontODE
-        Fixed length (the eigenvalues are those of :meth:`FrontODE.eigenvalues`).
+        The eigenvalues are those of :meth:`FrontODE.eigenvalues`.
     p : array_like, shape (2N,)
     cutoff : (float, float), optional
+    L : float, optional
+        With a variable length (``ode.beta``): linearize ``(p, L)`` there; the
+        displacements then have the change of length last and the ``2N - 3`` modes
+        include the perimeter mode.
 
     Returns
     -------
@@ -141,15 +156,15 @@ def reduced_modes(ode, p, cutoff=None):
     ((4,), 4, True)
     """
     p = np.asarray(p, dtype=float)
-    _, JT = ode.jacobian(p, cutoff)
-    T = ode.tangent_basis(p, cutoff)
+    _, JT = ode.jacobian(p, cutoff, L=L)
+    T = ode.tangent_basis(p, cutoff, L)
     lam, Y = np.linalg.eig(JT)
     order = np.argsort(-lam.real)
     # a gradient flow in a metric: the eigenvalues are real (up to the differencing)
     lam, Y = lam[order].real, Y[:, order].real
     Q = T @ Y
     Q /= np.linalg.norm(Q, axis=0)
-    phi, w = normal_modes(ode, p, Q, cutoff)
+    phi, w = normal_modes(ode, p, Q, cutoff, L)
     phi /= np.sqrt(w @ phi**2)
     return ReducedModes(lam, Q, phi, w)
 

@@ -34,7 +34,9 @@ the curve: it costs no dissipation, but it changes ``C`` and ``E``
 the closure rows and the saddle-point system gains one unknown and one row:
 ``dC/dL L' + dC/dp p' = 0`` and ``(dC/dL) . mu = -(dE/dL + beta (L - L*))``. At the
 quasi-static length (``L' = 0``) of a stiff perimeter it reduces to the fixed-length
-flow (tested).
+flow (tested). On the manifold of quasi-steady profiles (below) lengthening does move
+the curve -- the profile changes everywhere with ``L`` -- and the length has its own
+normal velocity, metric row and column (:mod:`qsa.reduction.quasisteady`).
 
 *Force correction.* ``correction="newton"`` evaluates the force with the residual of
 the splice corrected by one Newton step towards the slow manifold
@@ -123,8 +125,9 @@ class FrontODE:
         (:mod:`qsa.reduction.quasisteady`: metric, force and closure of the profile
         converged by Newton, 3-5 banded solves per evaluation); ``"profile-lag"``: the
         same with the lag of the profile behind moving fronts (three such
-        evaluations). Both need the fixed length (``beta=None``) and run on numpy
-        (``backend="auto"`` picks it; ``"numba"`` is refused).
+        evaluations). Both run on numpy (``backend="auto"`` picks it; ``"numba"`` is
+        refused); with ``beta`` the length is an unknown of the profile too (its
+        tangent in ``L``, :mod:`qsa.reduction.quasisteady`).
     backend : {"auto", "numpy", "numba"}
         Evaluation of the right-hand side (:mod:`qsa.reduction.backends`). ``"numpy"``:
         the reference (spectral cumulative integrals). ``"numba"``: one compiled kernel
@@ -184,9 +187,6 @@ class FrontODE:
                            self.beta, self.L_star)
         object.__setattr__(self, "_reference", ref)
         if self.correction in ("profile", "profile-lag"):
-            if self.beta is not None:
-                raise ValueError(f"correction={self.correction!r} needs a fixed length: "
-                                 f"pass beta=None")
             if self.backend == "numba":
                 raise ValueError(f"backend='numba' supports correction None or 'newton'; use "
                                  f"backend='numpy' or 'auto' with correction={self.correction!r}")
@@ -342,16 +342,27 @@ class FrontODE:
         return self._solve(y[:-1], cutoff, y[-1])[:y.size]
 
     # ---- linearization
-    def tangent_basis(self, p, cutoff=None):
-        """Orthonormal basis of ``{dC/dp . q = 0, sum q = 0}``, shape (2N, 2N - 4)."""
-        p = self._check(p)
-        J = self.evaluate(p, cutoff).closure_jacobian  # of the ODE's own manifold
-        A = np.vstack([J, np.ones((1, p.size))])
+    def tangent_basis(self, p, cutoff=None, L=None):
+        """Orthonormal basis of the tangent space of the closure and the base point.
+
+        ``{dC/dp . q = 0, sum q = 0}``, shape (2N, 2N - 4); with ``L`` (a variable
+        length, needs ``beta``) of ``{dC/dp . q + dC/dL l = 0, sum q = 0}`` in the
+        state ``(q, l)``, shape (2N + 1, 2N - 3).
+        """
+        p = self._check(p) if L is None else self._check_length(p, L)
+        e = self.evaluate(p, cutoff, L)  # the closure of the ODE's own manifold
+        n = e.velocity.size
+        A = np.zeros((4, n))
+        A[:3] = e.matrix[n:n + 3, :n]
+        A[3, :p.size] = 1.0
         _, _, Vt = np.linalg.svd(A)
         return Vt[4:].T
 
-    def jacobian(self, p, cutoff=None, step=None):
+    def jacobian(self, p, cutoff=None, step=None, L=None):
         """``dF/dp`` by central differences, shape (2N, 2N), and the tangent-space block.
+
+        With ``L`` (needs ``beta``): the Jacobian of ``(p', L')`` in ``(p, L)``, shape
+        (2N + 1, 2N + 1), and its block on the length-free tangent space.
 
         Returns
         -------
@@ -359,23 +370,29 @@ class FrontODE:
         J_T : ndarray, shape (2N - 4, 2N - 4)
             ``T^T J T`` with ``T`` = :meth:`tangent_basis`: the linearization of the
             reduced flow on the splice manifold; its eigenvalues are the slow
-            eigenvalues of the faceting flow at the splice.
+            eigenvalues of the faceting flow at the splice (with ``L``: 2N - 3, the
+            perimeter mode among them).
         """
-        p = self._check(p)
-        cut = self._cut(p, cutoff)
+        p = self._check(p) if L is None else self._check_length(p, L)
+        cut = self._cut(p, cutoff, L)
         h = 1e-3 * self.front.width if step is None else float(step)
-        n = p.size
+        if L is None:
+            y, F = p, (lambda y: self.velocity(y, cut))
+        else:
+            y = np.append(p, float(L))
+            F = (lambda y: np.append(*self.velocity_length(y[:-1], y[-1], cut)))
+        n = y.size
         J = np.empty((n, n))
         for j in range(n):
             e = np.zeros(n)
             e[j] = h
-            J[:, j] = (self.velocity(p + e, cut) - self.velocity(p - e, cut)) / (2 * h)
-        T = self.tangent_basis(p, cut)
+            J[:, j] = (F(y + e) - F(y - e)) / (2 * h)
+        T = self.tangent_basis(p, cut, L)
         return J, T.T @ J @ T
 
-    def eigenvalues(self, p, cutoff=None):
+    def eigenvalues(self, p, cutoff=None, L=None):
         """Eigenvalues of the tangent-space Jacobian (sorted by real part, descending)."""
-        ev = np.linalg.eigvals(self.jacobian(p, cutoff)[1])
+        ev = np.linalg.eigvals(self.jacobian(p, cutoff, L=L)[1])
         return ev[np.argsort(-ev.real)]
 
     def crossings(self, p, cutoff=None):

@@ -49,6 +49,29 @@ the differenced ``psi_j''`` (``R`` uses the exact ``psi_N''``). Checked against
 differences of ``kappa(p)``: 1e-8 on a regular polygon, 1e-6 on an unequal triangle
 (the undifferentiated ``nu_2, nu_3``).
 
+*Variable length.* With ``L`` free the profile also depends on ``L``; on the nodes
+(fixed ``s = sigma / L``) ``kappa_L = d kappa / dL`` comes from the same
+factorization, differentiating the system at fixed ``p``: ::
+
+    H kappa_L = B dmu_L + psi_pL m + psi_p w_L - E_L - 2 alpha^2 kappa'' / L,
+    T^T psi_p^T kappa_L = T^T (psi_p^T g_L - psi_pL^T delta + A_L^T eta),
+    sum kappa_L = sum g_L,   d C1(kappa, L) / dL = d C1(psi_N, L) / dL,
+
+``g_L``, ``psi_pL`` the splice's and its tangents' ``d/dL`` at fixed ``s``
+(:class:`qsa.reduction.manifold.SpliceFields`), ``A_L = dA/dL``,
+``w_L = -A^+ A_L m`` the normal part of ``dm/dL``, ``E_L`` the exact minus the
+differenced ``g_L''`` and ``-2 kappa'' / L`` the scaling of the second derivative.
+Checked against differences of ``kappa(p, L)``: 3e-10 on the octagon, 3e-7 on an
+unequal triangle. Unlike the splice's, whose lengthening moves no point of the curve,
+the profile changes everywhere with ``L`` (the turning multiplier that lifts the
+plateaus depends on it), so the length has a normal velocity ``phi_L``
+(:func:`profile_normal_velocities`), a metric row and column, and a row and column
+of the lag matrix; ``dE/dL`` and ``dC/dL`` are those of
+:func:`qsa.reduction.manifold.length_derivatives` on ``kappa``. The rest point of the
+length-free reduction on a regular polygon is then the N-pulse with its length
+(the octagon with facets 0.35 and ``beta = 5``: 1.66e-3 longer than the splice, to
+1e-13; the splice manifold rests 5e-4 *shorter*).
+
 The reduction (:class:`qsa.reduction.FrontODE`, ``correction="profile"``) then uses
 ``kappa`` and ``kappa_j`` wherever the splice used ``psi_N`` and ``psi_j``: the metric,
 the closure and the force ``dE/dp_j = int R(kappa) kappa_j``, the derivative of the
@@ -69,7 +92,7 @@ nothing visible. ``correction="profile-lag"`` puts ``p''`` = the acceleration of
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg.lapack import dgbtrf, dgbtrs
@@ -78,7 +101,7 @@ from qsa.reduction.correction import D2_STENCIL
 from qsa.reduction.manifold import SpliceFields, closure, normal_velocities
 
 __all__ = ["QuasiSteadyProfile", "quasisteady_profile", "closure_gradients", "closure_hessians",
-           "metric_covectors", "periodic_d2"]
+           "metric_covectors", "periodic_d2", "profile_normal_velocities"]
 
 
 def periodic_d2(f, length):
@@ -172,7 +195,7 @@ def _solve(fac, perm, Y):
 
 
 def quasisteady_profile(fields, alpha, well, band, quadrature, tol=1e-11, maxiter=20,
-                        lag=False):
+                        lag=False, length=False):
     """The constrained quasi-steady profile at the splice's positions (module docstring).
 
     Parameters
@@ -191,6 +214,11 @@ def quasisteady_profile(fields, alpha, well, band, quadrature, tol=1e-11, maxite
     maxiter : int
     lag : bool
         Also the lag matrix ``C``.
+    length : bool
+        Also the profile's tangent in the length ``L`` (a variable length; needs
+        ``fields`` of ``splice_fields(..., variable=True)``): the result's fields then
+        carry ``g_L``, ``dg_L``, ``Theta_L`` of ``kappa`` (module docstring), and the
+        lag matrix, with ``lag``, a row and column for ``L``.
 
     Returns
     -------
@@ -271,17 +299,89 @@ def quasisteady_profile(fields, alpha, well, band, quadrature, tol=1e-11, maxite
     K = Xr + X[:, 1:] @ dmu
     cum = L * quadrature.cumulative(np.column_stack([kappa, K]))
     dk = _spectral_d(kappa[:, None], L)
+    length_fields = {}
+    if length:
+        if fields.g_L is None:
+            raise ValueError("length=True needs fields of splice_fields(..., variable=True)")
+        eta3 = np.linalg.solve(AAt, A @ (P.T @ delta))
+        KL = _length_tangent(fields, delta, cum[:, 0], (fac, perm, X, S, B, Tc, A, AAt),
+                             m, eta3, alpha, quadrature)
+        cL = _spectral_d(KL[:, None], L)
+        length_fields = {"g_L": KL, "dg_L": cL[:, 0],
+                         "Theta_L": L * quadrature.cumulative(KL[:, None])[:, 0]
+                         - fields.s * kappa + cum[:, 0] / L}
     f = SpliceFields(psi=kappa, dpsi=dk[:, 0], d2psi=dk[:, 1], dpsi_dp=K,
                      weights=fields.weights, theta=cum[:, 0], Theta=cum[:, 1:],
-                     length=L, s=fields.s)
+                     length=L, s=fields.s, **length_fields)
     C = None
     if lag:
-        r = metric_covectors(f, quadrature, normal_velocities(f, quadrature))
+        r = metric_covectors(f, quadrature, profile_normal_velocities(f, quadrature))
         Z = _solve(fac, perm, r)
         Z -= X[:, 1:] @ np.linalg.solve(S, B.T @ Z)  # H Z = r + B eta, B^T Z = 0
         C = (r.T @ Z) / h
         C = 0.5 * (C + C.T)
     return QuasiSteadyProfile(f, delta, R, mult, iterations, converged, C)
+
+
+def _length_tangent(fields, delta, theta_k, system, m, eta, alpha, quadrature):
+    """``d kappa / dL`` on the nodes (fixed ``s``, fixed ``p``) from the factorization.
+
+    ``system = (fac, perm, X, S, B, Tc, A, AAt)`` of the last Newton step; ``theta_k``
+    the profile's angle; ``eta`` with ``psi_p^T delta = A^T eta`` (module docstring).
+    """
+    fac, perm, X, S, B, Tc, A, AAt = system
+    L, x = fields.length, fields.s
+    M = x.size
+    h = L / M
+    a2 = alpha**2
+    P, PL, g = fields.dpsi_dp, fields.dpsi_dp_L, fields.g_L
+    th, Th = fields.theta, fields.Theta
+    cs, sn = np.cos(th), np.sin(th)
+    # the splice's angles at fixed s: d theta / dL = theta / L + L int_0^s g_L
+    cum = L * quadrature.cumulative(np.column_stack([g, PL]))
+    thL = th / L + cum[:, 0]
+    ThL = Th / L + cum[:, 1:]
+    # d/dL of the splice's closure and of its Jacobian A = dC/dp (at fixed s)
+    dC1 = np.array([cs.sum(), sn.sum()]) / M + h * np.array([-(sn @ thL), cs @ thL])
+    AL = np.vstack([-(sn @ Th) / M - h * ((cs * thL) @ Th) - h * (sn @ ThL),
+                    (cs @ Th) / M - h * ((sn * thL) @ Th) + h * (cs @ ThL),
+                    P.sum(axis=0) / M + h * PL.sum(axis=0)])
+    wL = -A.T @ np.linalg.solve(AAt, AL @ m)  # the normal part of dm/dL
+    # d R / dL = H kappa_L + E_L + 2 alpha^2 kappa'' / L (psi_N'' exact, delta'' differenced)
+    EL = -a2 * (_spectral_d2(g[:, None], L)[:, 0] - periodic_d2(g, L))
+    d2k = fields.d2psi + periodic_d2(delta, L)
+    Xr = _solve(fac, perm, (PL @ m + P @ wL - EL - 2 * a2 * d2k / L)[:, None])[:, 0]
+    ck, sk = np.cos(theta_k), np.sin(theta_k)
+    C1k = h * np.array([ck.sum(), sk.sum()])
+    bc = (dC1 - C1k / L) / h - np.array([-(sk @ theta_k), ck @ theta_k]) / L
+    b = np.concatenate([Tc.T @ (P.T @ g - PL.T @ delta + AL.T @ eta), [g.sum()], bc])
+    dmu = np.linalg.solve(S, b - B.T @ Xr)
+    return Xr + X[:, 1:] @ dmu
+
+
+def profile_normal_velocities(fields, quadrature):
+    """``phi_j^perp`` of the profile's tangents, and of ``L`` when ``fields`` has ``g_L``.
+
+    The length column: at fixed ``s`` the curve ``Gamma(s) = L int_0^s tau(theta)``
+    moves by ``Gamma / L - L int_0^s n theta_L`` (``theta_L = theta / L + L int_0^s
+    g_L``), whose normal part is that at fixed ``sigma`` (they differ by ``s tau``);
+    rigid motions projected out like the others. Shape (M, 2N), or (M, 2N + 1).
+    """
+    if fields.g_L is None:
+        return normal_velocities(fields, quadrature)
+    L, x, kappa = fields.length, fields.s, fields.psi
+    thL = fields.Theta_L + x * kappa
+    aug = replace(fields, dpsi_dp=np.column_stack([fields.dpsi_dp, kappa / L + fields.g_L]),
+                  Theta=np.column_stack([fields.Theta, thL]))
+    phi = normal_velocities(aug, quadrature)
+    th = fields.theta
+    cs, sn = np.cos(th), np.sin(th)
+    gam = L * quadrature.cumulative(np.column_stack([cs, sn]))
+    dil = (sn * gam[:, 0] - cs * gam[:, 1]) / L  # the normal part of Gamma / L
+    Rr = np.column_stack([sn, -cs, gam[:, 0] * cs + gam[:, 1] * sn])
+    Rw = Rr.T * fields.weights
+    phi[:, -1] += dil - Rr @ np.linalg.solve(Rw @ Rr, Rw @ dil)
+    return phi
 
 
 def metric_covectors(fields, quadrature, phi):

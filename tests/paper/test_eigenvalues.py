@@ -140,3 +140,40 @@ def test_regular_polygon_family_on_the_profile_manifold():
                                     length="equilibrium", extra=4 * n)
             assert np.all(r.capture > 0.999)
             assert r.max_rel_diff < 0.005, (n, f, r.max_rel_diff)
+
+
+def test_length_free_profile_reduction_rests_at_the_n_pulse():
+    """With the length an unknown (the full problem's beta = 5) the quasi-steady
+    profiles' reduction rests at the N-pulse's own length (measured 2e-13 off), so the
+    default ``length="splice"`` compares at the same rest point; its perimeter mode
+    (-51.07) is paired too (8e-7 off) and the 12 slow modes are as at the
+    N-pulse's length (0.066%). The Newton-corrected splice rests 2.2e-3 shorter."""
+    r = compare_eigenvalues(8, facet=0.35, correction="profile-lag", variable_length=True)
+    assert r.variable_length and r.reduced.size == 13
+    assert abs(r.length_offset) < 1e-9
+    i = r.perimeter_index
+    assert r.reduced[i] < -40 and r.rel_diff[i] < 1e-5
+    slow = np.delete(r.rel_diff, i)
+    assert slow.max() < 0.002
+    fixed = compare_eigenvalues(8, facet=0.35, correction="profile-lag", length="equilibrium")
+    np.testing.assert_allclose(np.delete(r.reduced, i), fixed.reduced, rtol=1e-5)
+
+
+@pytest.mark.slow
+def test_regular_polygon_family_length_free_on_the_profile_manifold():
+    """6 ... 8 corners x facets 0.35, 0.5, ``correction="profile-lag"`` with the length
+    free at the reduction's own rest point, which is the N-pulse's (measured: slow
+    modes within 0.003-0.35%, the perimeter mode within 8e-7, lengths within 5e-11).
+
+    The table: docs/guide/reduction.md, "Slow eigenvalues on the regular polygon
+    families", length free.
+    """
+    for n in (6, 7, 8):
+        for f in (0.35, 0.5):
+            r = compare_eigenvalues(n, facet=f, correction="profile-lag",
+                                    variable_length=True, extra=4 * n)
+            assert np.all(r.capture > 0.999)
+            assert abs(r.length_offset) < 1e-9, (n, f, r.length_offset)
+            i = r.perimeter_index
+            assert r.rel_diff[i] < 1e-5, (n, f, r.rel_diff[i])
+            assert np.delete(r.rel_diff, i).max() < 0.005, (n, f, r.max_rel_diff)

@@ -103,8 +103,10 @@ def test_no_collision_before_t_final():
 
 
 def test_profile_manifold_reduction_against_the_dae():
-    """The quasi-steady profiles hold the length fixed: no variable-length comparison."""
+    """The quasi-steady profiles with the length fixed and free (N = 1200: +1.9% and
+    +1.0%, with the lag +1.2% and +0.3%)."""
     c = compare_fronts("short-facet", N=400, correction="profile")
     s = c.summary()
-    assert c.variable_length is None and s["variable_length"] is None
     assert s["correction"] == "profile" and c.collision_rel_diff < 0.03
+    v = s["variable_length"]
+    assert v["collision_rel_diff"] < 0.03 and v["L_change"] != 0.0

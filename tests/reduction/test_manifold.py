@@ -87,6 +87,9 @@ def test_length_fields_match_differences(state):
     # theta(L s) at fixed s: d/dL = s psi + Theta_L
     T = (fp.theta - fm.theta) / (2 * h) - quad.s * f.psi
     assert np.max(np.abs(T - f.Theta_L)) < 1e-6 * max(np.max(np.abs(f.Theta_L)), 1.0)
+    # d psi_N / d p_j at fixed s
+    dP = (fp.dpsi_dp - fm.dpsi_dp) / (2 * h)
+    assert np.max(np.abs(dP - f.dpsi_dp_L)) < 1e-6 * np.max(np.abs(f.dpsi_dp_L))
 
 
 @pytest.mark.parametrize("scenario", ["triangle", "short-facet"])

@@ -2,17 +2,25 @@
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from qsa.discretize import Fourier
 from qsa.equilibria import default_cutoff, polish, splice_polygon
 from qsa.equilibria.splice import polygon_positions
-from qsa.reduction.manifold import PeriodicQuadrature, closure, normal_velocities
+from qsa.reduction.manifold import (
+    PeriodicQuadrature,
+    closure,
+    energy,
+    normal_velocities,
+    splice_fields,
+)
 from qsa.reduction.ode import FrontODE
 from qsa.reduction.quasisteady import (
     closure_gradients,
     closure_hessians,
     metric_covectors,
     periodic_d2,
+    profile_normal_velocities,
     quasisteady_profile,
 )
 
@@ -200,8 +208,112 @@ def test_profile_lag_reduction_runs_and_matches_at_rest(octagon):
 def test_profile_options_are_checked():
     with pytest.raises(ValueError, match="backend='numba'"):
         FrontODE(ALPHA, KSTAR, 4.0, correction="profile", backend="numba")
-    with pytest.raises(ValueError, match="fixed length"):
-        FrontODE(ALPHA, KSTAR, 4.0, correction="profile-lag", beta=5.0)
     with pytest.raises(ValueError, match="correction must be"):
         FrontODE(ALPHA, KSTAR, 4.0, correction="exact")
     assert FrontODE(ALPHA, KSTAR, 4.0, correction="profile").backend_used == "numpy"
+
+
+# ---- variable length
+
+
+def _profile_at(ode, p, L, cut, length=False, lag=False):
+    """The profile at length ``L`` (nodes at fixed ``s``), with its tangent in ``L``."""
+    ref = ode.evaluator
+    f = splice_fields(ode.front, p, L, cut, ref.quadrature, variable=True)
+    return quasisteady_profile(f, ALPHA, ode.front.well, ref.band, ref.quadrature,
+                               length=length, lag=lag)
+
+
+@pytest.mark.parametrize("shape, tol", [("octagon", 1e-7), ("triangle", 1e-5)])
+def test_length_tangent_is_the_derivative_of_the_profile(shape, tol, request):
+    """``d kappa / dL`` at fixed ``s`` against central differences of ``kappa(p, L)``
+    (3e-10 on the octagon, 3e-7 on the triangle: its undifferentiated ``nu_2, nu_3``)."""
+    ode, p, cut = request.getfixturevalue(shape)
+    L = ode.length
+    KL = _profile_at(ode, p, L, cut, length=True).fields.g_L
+    e = 1e-5
+    fd = (_profile_at(ode, p, L + e, cut).fields.psi
+          - _profile_at(ode, p, L - e, cut).fields.psi) / (2 * e)
+    assert np.abs(fd - KL).max() < tol * np.abs(KL).max()
+
+
+def test_length_normal_velocity_against_the_moving_curve(octagon):
+    """``phi_L``: the normal part of ``d gamma / dL`` (fixed ``s``) of the curve of
+    ``kappa(p, L)``, modulo rigid motions; not small where the corners overlap."""
+    ode, p, cut = octagon
+    L, quad = ode.length, ode.evaluator.quadrature
+    qs = _profile_at(ode, p, L, cut, length=True)
+
+    def curve(Lv):
+        th = Lv * quad.cumulative(_profile_at(ode, p, Lv, cut).fields.psi[:, None])[:, 0]
+        return Lv * quad.cumulative(np.column_stack([np.cos(th), np.sin(th)])), th
+
+    e = 1e-5
+    dg = (curve(L + e)[0] - curve(L - e)[0]) / (2 * e)
+    g0, th = curve(L)
+    sn, cs = np.sin(th), np.cos(th)
+    phi = sn * dg[:, 0] - cs * dg[:, 1]
+    Rr = np.column_stack([sn, -cs, g0[:, 0] * cs + g0[:, 1] * sn])
+    Rw = Rr.T * qs.fields.weights
+    phi -= Rr @ np.linalg.solve(Rw @ Rr, Rw @ phi)
+    got = profile_normal_velocities(qs.fields, quad)
+    assert got.shape == (quad.M, p.size + 1)
+    assert np.abs(phi).max() > 1e-3  # 7e-3: the plateaus' lift changes with L
+    assert np.abs(got[:, -1] - phi).max() < 1e-6 * np.abs(phi).max()  # 6e-8 measured
+
+
+def test_variable_length_force_is_the_derivative_of_the_energy(triangle):
+    """``dE/dL`` on the manifold (perimeter penalty included) against differences, and
+    the energy decreasing at the rate ``v^T G v`` with the length's own metric column."""
+    ode0, p, cut = triangle
+    L = ode0.length
+    ode = FrontODE(ALPHA, KSTAR, L, beta=5.0, L_star=L - 0.01, correction="profile")
+
+    def total(Lv):
+        f = _profile_at(ode, p, Lv, cut).fields
+        return energy(f, ALPHA, ode.front.well) + 2.5 * (Lv - ode.L_star) ** 2
+
+    e = ode.evaluate(p, cut, L)
+    h = 1e-5
+    assert abs(e.force[-1] - (total(L + h) - total(L - h)) / (2 * h)) < 1e-8  # 7e-11
+    v = e.velocity
+    assert e.metric.shape == (p.size + 1, p.size + 1) and e.metric[-1, -1] > 0
+    np.testing.assert_allclose(e.force @ v, -v @ e.metric @ v, rtol=1e-10)
+    # the closure is kept to first order: dC/dp p' + dC/dL L' = 0
+    A = e.matrix[p.size + 1:p.size + 4, :p.size + 1]
+    np.testing.assert_allclose(A @ v, 0, atol=1e-10)
+    lagged = FrontODE(ALPHA, KSTAR, L, beta=5.0, L_star=L - 0.01, correction="profile-lag")
+    w = lagged.velocity_length(p, L, cut)
+    assert abs(w[1] - v[-1]) < 0.01 * abs(v[-1])  # the lag is small away from rest
+
+
+def test_variable_length_lag_matrix_has_the_length_row(octagon):
+    """With the length the lag matrix gains its row and column (``phi_L``), symmetric
+    and positive semi-definite, ``C_LL > 0``."""
+    ode, p, cut = octagon
+    C = _profile_at(ode, p, ode.length, cut, length=True, lag=True).lag
+    assert C.shape == (p.size + 1, p.size + 1) and C[-1, -1] > 0
+    assert np.allclose(C, C.T) and np.linalg.eigvalsh(C).min() > -1e-12 * np.abs(C).max()
+
+
+def test_variable_length_rest_point_is_the_polished_n_pulse():
+    """On the octagon the length-free reduction rests at the N-pulse's length (the
+    perimeter penalty against the lifted plateaus: 1.66e-3 longer than the splice;
+    agreement 2e-13 measured), where the splice manifold rests 5e-4 below the splice's
+    length, 2.2e-3 below the N-pulse's."""
+    n, facet, beta = 8, 0.35, 5.0
+    p0, L0, cut = _regular(n, facet)
+    ode = FrontODE(ALPHA, KSTAR, L0, beta=beta, correction="profile")
+
+    def length_rate(dL):
+        p, L, _ = _regular(n, facet, dL)
+        return ode.velocity_length(p, L, cut)
+
+    dL = brentq(lambda d: length_rate(d)[1], 0.0, 4e-3, xtol=1e-15)
+    v, _ = length_rate(dL)
+    assert np.abs(v - v.mean()).max() < 1e-10  # a rest point (up to the base point)
+    eq = splice_polygon(np.full(n, 2 * np.pi / n), np.full(n, facet), ALPHA, kstar=KSTAR,
+                        beta=beta, grid=Fourier(ode.grid.s.size))
+    pol = polish(eq.energy, eq.curve)
+    assert pol.success and pol.residual < 1e-6
+    assert abs(dL - (pol.curve.length() - L0)) < 1e-10
