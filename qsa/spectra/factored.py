@@ -36,7 +36,11 @@ values are computed separately, by Rayleigh-Ritz of the inverse on ``span R``
 the whole bordered system; when a probe shows that working-precision refinement stalls
 (the shifted core nearly singular), the residual is accumulated in extended precision
 (``np.longdouble``), which brings the forward error down to the rounding of the solution
-itself. The forward-error estimates always use extended-precision residuals.
+itself. The forward-error estimate is one more correction, not applied, with the
+residual in extended precision; when refinement does not need it there, the wide
+two-point blocks (most of the entries, and of the cost) are multiplied in working
+precision, and twice the rounding noise they add to the correction, measured by the
+same probe, is added to the estimate.
 
 Round-off then enters through the factors: the error of a slow eigenvalue scales with
 the order-2 blocks applied to its (smooth) eigenvector, not with ``|J|``.
@@ -269,13 +273,32 @@ class FactoredNormalOperator:
         vectors : ndarray, shape (N, m)
         errors : ndarray, shape (m,)
         """
+        vals, vecs = self._rayleigh_ritz(R)
+        return vals, vecs, self.rounding_error(vecs) + _EPS * np.abs(vals)
+
+    def ritz_values(self, R):
+        """The Ritz values of :meth:`ritz` alone, without their error estimates.
+
+        Enough where they only place a shift (the rounding bound costs more passes
+        over the factors than the values).
+
+        Parameters
+        ----------
+        R : ndarray, shape (m, N)
+
+        Returns
+        -------
+        ndarray, shape (m,)
+        """
+        return self._rayleigh_ritz(R)[0]
+
+    def _rayleigh_ritz(self, R):
         R = np.asarray(R, dtype=float).reshape(-1, self.N)
         if R.shape[0] == 0:
-            return np.zeros(0), np.zeros((self.N, 0)), np.zeros(0)
+            return np.zeros(0), np.zeros((self.N, 0))
         B = self.quadratic(R.T)
         vals, Q = np.linalg.eigh(0.5 * (B + B.T))
-        vecs = R.T @ Q
-        return vals, vecs, self.rounding_error(vecs) + _EPS * np.abs(vals)
+        return vals, R.T @ Q
 
     # ------------------------------------------------------ rounding estimate
     def rounding_error(self, phi, chi=None):
@@ -462,6 +485,8 @@ class ShiftInvert:
                              [-Hkg * gk[None, :], -Hkk, I],
                              [-np.asarray(G), I, np.zeros((N, N))]])
         self._core = core
+        wide = core.wide() if sparse else None
+        self._wide = wide if wide is not None and wide.any() else None
         r = op.rank
         rows = np.vstack([Rc, R])  # constraints first: solve_free keeps them
         m = rows.shape[0]
@@ -496,7 +521,6 @@ class ShiftInvert:
         if self._lu is None:
             self._lu = factorize(core.tocsc() if sparse else core, B1, B2, D)
         self._free = None
-        self._ext = None
         self._probe: dict = {}
         self.last_correction = np.zeros(0)
 
@@ -505,29 +529,31 @@ class ShiftInvert:
         """``(N, N)``: the operator acts on nodal vectors."""
         return (self.op.N, self.op.N)
 
-    def _extended(self, p):
-        """The bordered matrix's blocks in extended precision (``np.longdouble``), cached."""
-        if self._ext is None:
-            ld = np.longdouble
-            core = self._core.astype(ld)
-            self._ext = (core, self._B1.astype(ld), self._B2.astype(ld), self._D.astype(ld))
-        core, B1, B2, D = self._ext
-        return core, B1[:, :p], B2[:p], D[:p, :p]
-
-    def _residual(self, rhs, x, p):
+    def _residual(self, rhs, x, p, wide_in_working=False):
         """``rhs - A x`` for the core with the first ``p`` border columns, in extended precision.
 
         Mixed-precision iterative refinement: with the residual accumulated in extended
-        precision, refinement converges to the solution's rounding level ``eps |x|``
-        instead of stalling at ``cond(A) eps |x|`` (the near-zero eigenvalues make the
-        shifted system nearly singular).
+        precision (``np.longdouble``), refinement converges to the solution's rounding
+        level ``eps |x|`` instead of stalling at ``cond(A) eps |x|`` (the near-zero
+        eigenvalues make the shifted system nearly singular). The float64 entries are
+        widened block by block inside the products (exactly), so no extended copy of
+        the core is kept. With ``wide_in_working``, the wide blocks of a sparse core
+        (:meth:`~qsa.linalg.BlockSparse.wide`: the implicit state's two-point blocks,
+        nearly all of its entries and of the cost) are multiplied in working precision:
+        the rounding noise they add to a correction is measured by the probe
+        (:meth:`_probe_refinement`), and is small against that of the local rows.
         """
-        core, B1, B2, D = self._extended(p)
-        n = core.shape[0]
-        xl = np.asarray(x, dtype=np.longdouble)
-        y = core @ xl[:n] + B1 @ xl[n:]
-        z = B2 @ xl[:n] + D @ xl[n:]
-        return (np.asarray(rhs, dtype=np.longdouble) - np.concatenate([y, z], axis=0)).astype(float)
+        ld = np.longdouble
+        n = self._core.shape[0]
+        xl = np.asarray(x, dtype=ld)
+        if wide_in_working and self._wide is not None:
+            y = (self._core.product(xl[:n], ~self._wide)
+                 + self._core.product(np.asarray(x, dtype=float)[:n], self._wide))
+        else:
+            y = self._core @ xl[:n]
+        y = y + self._B1[:, :p] @ xl[n:]
+        z = self._B2[:p] @ xl[:n] + self._D[:p, :p] @ xl[n:]
+        return (np.asarray(rhs, dtype=ld) - np.concatenate([y, z], axis=0)).astype(float)
 
     def _residual_double(self, rhs, x, p):
         """``rhs - A x`` in working precision (classical iterative refinement)."""
@@ -536,23 +562,45 @@ class ShiftInvert:
         z = self._B2[:p] @ x[:n] + self._D[:p, :p] @ x[n:]
         return rhs - np.concatenate([y, z], axis=0)
 
-    def _needs_extended(self, lu, p):
-        """Whether refinement needs extended-precision residuals for this factorization.
+    def _wnorm(self, x):
+        """``<.,.>`` norms of the columns of the ``phi`` rows of ``x``."""
+        N = self.op.N
+        w = self.op.w if x.ndim == 1 else self.op.w[:, None]
+        return np.sqrt(np.sum(w * x[:N] ** 2, axis=0))
 
-        A probe: one random right-hand side refined in working precision; if one more
-        correction with the residual in extended precision still changes the solution
-        by more than ``1e-10`` of its size (the shifted system is nearly singular), every
-        refinement uses extended precision (several times slower for dense cores).
+    def _probe_refinement(self, lu, p):
+        """``(extended, noise)`` for this factorization, from a probe (cached per factors).
+
+        Two random right-hand sides are solved and refined once in working precision;
+        then one more correction is computed with the residual in extended precision,
+        and with the wide blocks in working precision (:meth:`_residual`).
+
+        * ``extended``: the extended-precision correction still exceeds ``1e-10`` of
+          the solution (the shifted system is nearly singular, working-precision
+          refinement stalls): every refinement and estimate uses the residual in
+          extended precision throughout.
+        * ``noise``: otherwise, the largest ``|dx_wide - dx_ext| / |x|`` (``phi`` rows,
+          ``<.,.>`` norms), the relative size of the rounding noise that the wide blocks
+          in working precision add to a correction; the forward-error estimate adds
+          twice that much of its solution (:meth:`_refined`).
         """
         key = (id(lu), p)
         if key not in self._probe:
             N = self.op.N
-            rhs = np.zeros(self._core.shape[0] + p)
-            rhs[:N] = np.random.default_rng(3).standard_normal(N) * self.op.w
+            rng = np.random.default_rng(3)
+            rhs = np.zeros((self._core.shape[0] + p, 2))
+            for j in range(2):
+                rhs[:N, j] = rng.standard_normal(N) * self.op.w
             x = lu.solve(rhs)
             x = x + lu.solve(self._residual_double(rhs, x, p))
             dx = lu.solve(self._residual(rhs, x, p))
-            self._probe[key] = bool(np.linalg.norm(dx) > 1e-10 * np.linalg.norm(x))
+            extended = bool(np.any(np.linalg.norm(dx, axis=0)
+                                   > 1e-10 * np.linalg.norm(x, axis=0)))
+            noise = 0.0
+            if not extended and self._wide is not None:
+                dxw = lu.solve(self._residual(rhs, x, p, wide_in_working=True))
+                noise = float(np.max(self._wnorm(dxw - dx) / self._wnorm(x)))
+            self._probe[key] = (extended, noise)
         return self._probe[key]
 
     def _refined(self, lu, p, b, refine, estimate):
@@ -568,13 +616,17 @@ class ShiftInvert:
             finally:
                 self._capacitance.phi_only = False
         x = lu.solve(rhs)
-        residual = self._residual if self._needs_extended(lu, p) else self._residual_double
+        extended, noise = self._probe_refinement(lu, p)
+        residual = self._residual if extended else self._residual_double
         for _ in range(refine):
             x = x + lu.solve(residual(rhs, x, p))
         if estimate:
-            dx = lu.solve(self._residual(rhs, x, p))
-            w = self.op.w if b.ndim == 1 else self.op.w[:, None]
-            self.last_correction = np.sqrt(np.sum(w * dx[:N] ** 2, axis=0))
+            # one more correction, not applied: |x - x_true| <= |dx| + |dx - dx_true|, the
+            # second term the rounding of the wide blocks in working precision (the probe's)
+            self._last_dx = lu.solve(self._residual(rhs, x, p, wide_in_working=not extended))[:N]
+            self._last_noise = 2.0 * noise
+            self.last_correction = (self._wnorm(self._last_dx)
+                                    + self._last_noise * self._wnorm(x[:N]))
         self._last_core = x[: self._core.shape[0]]
         return x[:N]
 
@@ -623,7 +675,7 @@ class ShiftInvert:
 
         Rayleigh-Ritz for ``K = (W J - sigma W)^{-1} W`` (without the deflation; with the
         constraints, ``R`` in their complement) on the span of the ``<.,.>``-orthonormal
-        rows ``R``: ``K`` smooths, so the rounding noise
+        rows ``R`` (:meth:`ritz_pairs`): ``K`` smooths, so the rounding noise
         of the rigid fields (computed from the node positions) does not enter, as it
         does in the direct quadratic form (:meth:`FactoredNormalOperator.ritz`), whose
         error grows like ``eps^2 |J|``.
@@ -638,23 +690,49 @@ class ShiftInvert:
         vectors : ndarray, shape (N, m)
         errors : ndarray, shape (m,)
         """
-        w = self.op.w
-        m = R.shape[0]
-        if m == 0:
+        if R.shape[0] == 0:
             return np.zeros(0), np.zeros((self.op.N, 0)), np.zeros(0)
-        X = self.solve_free(w[:, None] * R.T)
-        A = R @ (w[:, None] * X)
+        vals, vecs, err = self.ritz_pairs(R.T, free=True)
+        return vals, vecs, err.total
+
+    def ritz_pairs(self, X, free=False):
+        """Rayleigh-Ritz of ``K = (W J - sigma W)^{-1} W`` on ``span X``, with error estimates.
+
+        One refined solve of the columns with its forward-error estimate: the Ritz
+        vectors ``X Q`` (``Q`` the orthogonal eigenvectors of ``X^T W K X``) have the
+        products ``(K X) Q``, the corrections and the solution's ``chi`` of the same
+        combinations, so their errors (:meth:`errors`) need no second solve.
+
+        Parameters
+        ----------
+        X : ndarray, shape (N, k)
+            ``<.,.>``-orthonormal columns.
+        free : bool
+            Solve without the deflation (:meth:`solve_free`).
+
+        Returns
+        -------
+        values : ndarray, shape (j,)
+            ``sigma + 1 / nu`` for the Ritz values ``nu != 0`` of ``K``.
+        vectors : ndarray, shape (N, j)
+            ``<.,.>``-normalised.
+        errors : EigenErrors
+        """
+        w = self.op.w
+        KX = (self.solve_free if free else self.solve)(w[:, None] * X, estimate=True)
+        A = X.T @ (w[:, None] * KX)
         nu, Q = np.linalg.eigh(0.5 * (A + A.T))
-        vecs = R.T @ Q
-        KX = self.solve_free(w[:, None] * vecs, estimate=True)
-        chi = self._solution_chi() / nu[None, :]
+        keep = nu != 0
+        nu, Q = nu[keep], Q[:, keep]
+        vecs = X @ Q
+        scale = 1.0 / self._wnorm(vecs)
+        Q = Q * scale[None, :]
+        vecs = vecs * scale[None, :]
+        correction = (self._wnorm(self._last_dx @ Q)
+                      + self._last_noise * self._wnorm(self._last_core[:self.op.N] @ Q))
+        chi = self._solution_chi() @ Q
         vals = self.sigma + 1.0 / nu
-        res = KX - nu[None, :] * vecs
-        rn = np.sqrt(np.sum(w[:, None] * res**2, axis=0)) + self.last_correction
-        den = np.abs(nu) * (np.abs(nu) - rn)
-        err = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
-        err = err + self.op.rounding_error(vecs, chi) + _EPS * np.abs(vals)
-        return vals, vecs, err
+        return vals, vecs, self._errors(vals, vecs, KX @ Q, correction, chi)
 
     def operator(self):
         """``K = (W J - sigma W)^{-1} W`` as a ``scipy.sparse.linalg.LinearOperator``."""
@@ -674,13 +752,18 @@ class ShiftInvert:
         -------
         EigenErrors
         """
-        w = self.op.w
         lam = np.asarray(eigenvalues, dtype=float)
+        KV = self.solve(self.op.w[:, None] * vectors, estimate=True)
+        return self._errors(lam, vectors, KV, self.last_correction, self._solution_chi())
+
+    def _errors(self, lam, vectors, KV, correction, chi):
+        """:class:`EigenErrors` from ``K V`` (a solve with forward error ``correction``)
+        and the solve's ``chi`` for ``K V``."""
+        w = self.op.w
         nu = 1.0 / (lam - self.sigma)
-        r = self.solve(w[:, None] * vectors, estimate=True) - nu[None, :] * vectors
-        chi = self._solution_chi() / nu[None, :]
-        rn = np.sqrt(np.sum(w[:, None] * r * r, axis=0)) + self.last_correction
+        r = KV - nu[None, :] * vectors
+        rn = np.sqrt(np.sum(w[:, None] * r * r, axis=0)) + correction
         den = np.abs(nu) * (np.abs(nu) - rn)
         res = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
-        rnd = self.op.rounding_error(vectors, chi)
+        rnd = self.op.rounding_error(vectors, chi / nu[None, :])
         return EigenErrors(res, rnd, res + rnd + _EPS * np.abs(lam))

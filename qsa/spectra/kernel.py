@@ -377,7 +377,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None,
             sol = certified_eigenpairs(op, basis, k=k, sigma=0.0, constrain=cbasis)
         else:
             sol = certified_eigenpairs(op, np.zeros((0, curve.N)), k=k, sigma=0.0,
-                                       rigid=op.ritz(basis)[0], constrain=cbasis)
+                                       rigid=op.ritz_values(basis), constrain=cbasis)
         n_kernel, tol = kernel_size(sol.values, sol.errors, sol.is_kernel)
         if kernel_tol is not None:
             tol = real_number(kernel_tol, "kernel_tol", positive=True)
