@@ -737,6 +737,9 @@ def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"
 # Hessian and Hessian-vector products at one curve several times, and each set costs a
 # pass over all pairs. One entry, keyed by the kernel and the curve's arrays.
 _LAST_DERIVATIVES: dict = {}
+# Likewise the fields (B, force) at the last curve: its residual, multipliers and
+# residual floor each ask for the gradient again.
+_LAST_FIELDS: dict = {}
 
 
 @dataclass(frozen=True)
@@ -824,7 +827,13 @@ class Adhesion(Energy):
         ((33,), (33, 2), True)
         """
         x, y, w = self._data(c)
-        return adhesion_fields(self.kernel, x, y, w, method=self.method)
+        key = (self.kernel, self.method, x.tobytes(), y.tobytes(), np.asarray(w).tobytes())
+        hit = _LAST_FIELDS.get(key)
+        if hit is None:
+            hit = adhesion_fields(self.kernel, x, y, w, method=self.method)
+            _LAST_FIELDS.clear()
+            _LAST_FIELDS[key] = hit
+        return hit[0].copy(), hit[1].copy()
 
     def extrinsic_gradient(self, c) -> np.ndarray:
         """``(𝔸.n + kappa B, 0)``, gradient in ``<f, h> = int f h dsigma`` (e:Adh-Ex_grad).

@@ -593,13 +593,15 @@ class ShiftInvert:
                 rhs[:N, j] = rng.standard_normal(N) * self.op.w
             x = lu.solve(rhs)
             x = x + lu.solve(self._residual_double(rhs, x, p))
-            dx = lu.solve(self._residual(rhs, x, p))
-            extended = bool(np.any(np.linalg.norm(dx, axis=0)
+            residuals = [self._residual(rhs, x, p)]
+            if self._wide is not None:
+                residuals.append(self._residual(rhs, x, p, wide_in_working=True))
+            dx = lu.solve(np.hstack(residuals))  # the two corrections in one block solve
+            extended = bool(np.any(np.linalg.norm(dx[:, :2], axis=0)
                                    > 1e-10 * np.linalg.norm(x, axis=0)))
             noise = 0.0
             if not extended and self._wide is not None:
-                dxw = lu.solve(self._residual(rhs, x, p, wide_in_working=True))
-                noise = float(np.max(self._wnorm(dxw - dx) / self._wnorm(x)))
+                noise = float(np.max(self._wnorm(dx[:, 2:] - dx[:, :2]) / self._wnorm(x)))
             self._probe[key] = (extended, noise)
         return self._probe[key]
 

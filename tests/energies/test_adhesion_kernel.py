@@ -330,3 +330,20 @@ def test_parallel_strands_force_and_B_closed_forms(a, D):
     assert F[mid, 1] == pytest.approx(force, rel=1e-10, abs=1e-12 * A0 / l_star)
     assert abs(F[mid, 0]) < 1e-12 * A0 / l_star  # symmetric about the middle node
     assert B[mid] == pytest.approx(b, rel=1e-10)
+
+
+def test_fields_at_the_last_curve_are_reused_as_computed():
+    from qsa import Curve, FiniteDifference
+    from qsa.energies import Adhesion
+
+    E = Adhesion(A0=10.0, l_star=0.3, a=1.0)
+    c1 = Curve.polar(lambda t: 1 + 0.2 * np.cos(3 * t), FiniteDifference(90))
+    c2 = Curve.polar(lambda t: 1 + 0.25 * np.cos(3 * t), FiniteDifference(90))
+    for c in (c1, c2, c1):
+        B, force = E.fields(c)
+        x, y = c.positions()
+        B0, force0 = adhesion_fields(E.kernel, x, y, c.dsigma)
+        assert np.array_equal(B, B0) and np.array_equal(force, force0)
+        B[:] = 0.0  # the caller's copy: the next call is unaffected
+        force[:] = 0.0
+        assert np.array_equal(E.fields(c)[0], B0)
