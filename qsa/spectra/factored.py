@@ -76,6 +76,7 @@ from qsa import geometry
 from qsa.curve import Curve
 from qsa.linalg import BlockSparse, Factorization, ReducedHessian, SparsePlusLowRank, factorize
 from qsa.spectra.capacitance import CapacitanceCore, use_capacitance
+from qsa.spectra.refinement import BorderedSystem, Probe, column_norms, probe, refined_solve
 
 __all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
 
@@ -485,8 +486,6 @@ class ShiftInvert:
                              [-Hkg * gk[None, :], -Hkk, I],
                              [-np.asarray(G), I, np.zeros((N, N))]])
         self._core = core
-        wide = core.wide() if sparse else None
-        self._wide = wide if wide is not None and wide.any() else None
         r = op.rank
         rows = np.vstack([Rc, R])  # constraints first: solve_free keeps them
         m = rows.shape[0]
@@ -521,7 +520,8 @@ class ShiftInvert:
         if self._lu is None:
             self._lu = factorize(core.tocsc() if sparse else core, B1, B2, D)
         self._free = None
-        self._probe: dict = {}
+        self._system = BorderedSystem(core, B1, B2, D)
+        self._probes: dict = {}
         self.last_correction = np.zeros(0)
 
     @property
@@ -529,86 +529,17 @@ class ShiftInvert:
         """``(N, N)``: the operator acts on nodal vectors."""
         return (self.op.N, self.op.N)
 
-    def _residual(self, rhs, x, p, wide_in_working=False):
-        """``rhs - A x`` for the core with the first ``p`` border columns, in extended precision.
-
-        Mixed-precision iterative refinement: with the residual accumulated in extended
-        precision (``np.longdouble``), refinement converges to the solution's rounding
-        level ``eps |x|`` instead of stalling at ``cond(A) eps |x|`` (the near-zero
-        eigenvalues make the shifted system nearly singular). The float64 entries are
-        widened block by block inside the products (exactly), so no extended copy of
-        the core is kept. With ``wide_in_working``, the wide blocks of a sparse core
-        (:meth:`~qsa.linalg.BlockSparse.wide`: the implicit state's two-point blocks,
-        nearly all of its entries and of the cost) are multiplied in working precision:
-        the rounding noise they add to a correction is measured by the probe
-        (:meth:`_probe_refinement`), and is small against that of the local rows.
-        """
-        ld = np.longdouble
-        n = self._core.shape[0]
-        xl = np.asarray(x, dtype=ld)
-        if wide_in_working and self._wide is not None:
-            y = (self._core.product(xl[:n], ~self._wide)
-                 + self._core.product(np.asarray(x, dtype=float)[:n], self._wide))
-        else:
-            y = self._core @ xl[:n]
-        y = y + self._B1[:, :p] @ xl[n:]
-        z = self._B2[:p] @ xl[:n] + self._D[:p, :p] @ xl[n:]
-        return (np.asarray(rhs, dtype=ld) - np.concatenate([y, z], axis=0)).astype(float)
-
-    def _residual_double(self, rhs, x, p):
-        """``rhs - A x`` in working precision (classical iterative refinement)."""
-        n = self._core.shape[0]
-        y = self._core @ x[:n] + self._B1[:, :p] @ x[n:]
-        z = self._B2[:p] @ x[:n] + self._D[:p, :p] @ x[n:]
-        return rhs - np.concatenate([y, z], axis=0)
-
-    def _wnorm(self, x):
-        """``<.,.>`` norms of the columns of the ``phi`` rows of ``x``."""
-        N = self.op.N
-        w = self.op.w if x.ndim == 1 else self.op.w[:, None]
-        return np.sqrt(np.sum(w * x[:N] ** 2, axis=0))
-
-    def _probe_refinement(self, lu, p):
-        """``(extended, noise)`` for this factorization, from a probe (cached per factors).
-
-        Two random right-hand sides are solved and refined once in working precision;
-        then one more correction is computed with the residual in extended precision,
-        and with the wide blocks in working precision (:meth:`_residual`).
-
-        * ``extended``: the extended-precision correction still exceeds ``1e-10`` of
-          the solution (the shifted system is nearly singular, working-precision
-          refinement stalls): every refinement and estimate uses the residual in
-          extended precision throughout.
-        * ``noise``: otherwise, the largest ``|dx_wide - dx_ext| / |x|`` (``phi`` rows,
-          ``<.,.>`` norms), the relative size of the rounding noise that the wide blocks
-          in working precision add to a correction; the forward-error estimate adds
-          twice that much of its solution (:meth:`_refined`).
-        """
+    def _probe(self, lu, p) -> Probe:
+        """The refinement probe of these factors (:func:`~qsa.spectra.refinement.probe`)."""
         key = (id(lu), p)
-        if key not in self._probe:
-            N = self.op.N
-            rng = np.random.default_rng(3)
-            rhs = np.zeros((self._core.shape[0] + p, 2))
-            for j in range(2):
-                rhs[:N, j] = rng.standard_normal(N) * self.op.w
-            x = lu.solve(rhs)
-            x = x + lu.solve(self._residual_double(rhs, x, p))
-            residuals = [self._residual(rhs, x, p)]
-            if self._wide is not None:
-                residuals.append(self._residual(rhs, x, p, wide_in_working=True))
-            dx = lu.solve(np.hstack(residuals))  # the two corrections in one block solve
-            extended = bool(np.any(np.linalg.norm(dx[:, :2], axis=0)
-                                   > 1e-10 * np.linalg.norm(x, axis=0)))
-            noise = 0.0
-            if not extended and self._wide is not None:
-                noise = float(np.max(self._wnorm(dx[:, 2:] - dx[:, :2]) / self._wnorm(x)))
-            self._probe[key] = (extended, noise)
-        return self._probe[key]
+        if key not in self._probes:
+            self._probes[key] = probe(lu.solve, self._system, p, self.op.w)
+        return self._probes[key]
 
     def _refined(self, lu, p, b, refine, estimate):
         N = self.op.N
         b = np.asarray(b, dtype=float)
-        rhs = np.zeros((self._core.shape[0] + p,) + b.shape[1:])
+        rhs = np.zeros((self._system.n + p,) + b.shape[1:])
         rhs[:N] = b
         if refine == 0 and not estimate and self._capacitance is not None:
             # phi alone is wanted, and the border reads only the phi and psi rows
@@ -617,19 +548,13 @@ class ShiftInvert:
                 return lu.solve(rhs)[:N]
             finally:
                 self._capacitance.phi_only = False
-        x = lu.solve(rhs)
-        extended, noise = self._probe_refinement(lu, p)
-        residual = self._residual if extended else self._residual_double
-        for _ in range(refine):
-            x = x + lu.solve(residual(rhs, x, p))
+        x, dx, noise = refined_solve(lu.solve, self._system, p, rhs, refine,
+                                     self._probe(lu, p), self.op.w, estimate)
         if estimate:
-            # one more correction, not applied: |x - x_true| <= |dx| + |dx - dx_true|, the
-            # second term the rounding of the wide blocks in working precision (the probe's)
-            self._last_dx = lu.solve(self._residual(rhs, x, p, wide_in_working=not extended))[:N]
-            self._last_noise = 2.0 * noise
-            self.last_correction = (self._wnorm(self._last_dx)
-                                    + self._last_noise * self._wnorm(x[:N]))
-        self._last_core = x[: self._core.shape[0]]
+            self._last_dx, self._last_noise = dx, noise
+            self.last_correction = (column_norms(dx, self.op.w)
+                                    + noise * column_norms(x, self.op.w))
+        self._last_core = x[: self._system.n]
         return x[:N]
 
     def _solution_chi(self):
@@ -727,11 +652,11 @@ class ShiftInvert:
         keep = nu != 0
         nu, Q = nu[keep], Q[:, keep]
         vecs = X @ Q
-        scale = 1.0 / self._wnorm(vecs)
+        scale = 1.0 / column_norms(vecs, w)
         Q = Q * scale[None, :]
         vecs = vecs * scale[None, :]
-        correction = (self._wnorm(self._last_dx @ Q)
-                      + self._last_noise * self._wnorm(self._last_core[:self.op.N] @ Q))
+        correction = (column_norms(self._last_dx @ Q, w)
+                      + self._last_noise * column_norms(self._last_core[:self.op.N] @ Q, w))
         chi = self._solution_chi() @ Q
         vals = self.sigma + 1.0 / nu
         return vals, vecs, self._errors(vals, vecs, KX @ Q, correction, chi)

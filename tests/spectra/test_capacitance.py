@@ -12,6 +12,7 @@ from qsa.spectra import (
     FactoredNormalOperator,
     certified_eigenpairs,
     lagrange_hessian,
+    refinement,
     rigid_normal_basis,
 )
 from qsa.spectra import capacitance as cap
@@ -103,33 +104,41 @@ def test_unrefined_solve_returns_phi_of_the_refined_one(forced):
 def _full_solution(si, b):
     """The refined solution of the whole bordered system for ``b`` (as ``solve`` makes it)."""
     p = si._B1.shape[1]
-    rhs = np.zeros((si._core.shape[0] + p,) + b.shape[1:])
+    rhs = np.zeros((si._system.n + p,) + b.shape[1:])
     rhs[: si.op.N] = b
     x = si._lu.solve(rhs)
-    return rhs, x + si._lu.solve(si._residual_double(rhs, x, p))
+    return rhs, x + si._lu.solve(si._system.residual(rhs, x, p))
 
 
-def test_forward_error_estimate_covers_the_extended_precision_correction(forced):
+@pytest.mark.parametrize("mixed", [True, False])
+def test_forward_error_estimate_covers_the_extended_precision_correction(forced, monkeypatch,
+                                                                         mixed):
+    monkeypatch.setattr(refinement, "MIXED_NOISE", np.inf if mixed else 0.0)
     c, op = _operator(300, 0.1)
     si = ShiftInvert(op, 0.0)
-    assert si._wide is not None and si._wide.any()
+    assert si._system.wide is not None
     w = c.dsigma
     s = c.grid.s
     B = np.column_stack([w * np.cos(2 * np.pi * j * s) for j in range(2, 8)]
                         + [w * np.random.default_rng(4).standard_normal(c.N)])
     si.solve(B, estimate=True)
-    extended, noise = si._probe_refinement(si._lu, si._B1.shape[1])
-    assert not extended and 0 < noise < 1e-12
+    found = si._probe(si._lu, si._B1.shape[1])
+    assert not found.extended and found.mixed is mixed
+    assert 0 < found.noise < 1e-12 and 0 < found.accuracy < 1e-12
     # the correction with the whole residual in extended precision
+    p = si._B1.shape[1]
     rhs, x = _full_solution(si, B)
-    dx = si._lu.solve(si._residual(rhs, x, si._B1.shape[1]))
+    dx = si._lu.solve(si._system.residual(rhs, x, p, "extended"))
     ext = np.sqrt(np.sum(w[:, None] * dx[: c.N] ** 2, axis=0))
+    if not mixed:  # the extended correction itself
+        assert np.allclose(si.last_correction, ext, rtol=1e-12, atol=0)
+        return
     assert np.all(si.last_correction >= ext)
     # the wide blocks in working precision move the correction by the probe's noise level
-    dxw = si._lu.solve(si._residual(rhs, x, si._B1.shape[1], wide_in_working=True))
+    dxw = si._lu.solve(si._system.residual(rhs, x, p, "mixed"))
     moved = np.sqrt(np.sum(w[:, None] * (dxw - dx)[: c.N] ** 2, axis=0))
     xn = np.sqrt(np.sum(w[:, None] * x[: c.N] ** 2, axis=0))
-    assert np.all(moved <= 2 * noise * xn)
+    assert np.all(moved <= 2 * found.noise * xn)
 
 
 def test_ritz_pairs_errors_equal_those_of_a_second_solve(forced):
