@@ -275,9 +275,10 @@ def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol, energy=None)
     L = LH.matrix
     H = LH.energy_hessian
     # scales of the relative residuals below: a digit is enough, and each product with a
-    # two-point Hessian passes over all its pairs
-    normL = operator_norm(curve, L, iters=8)
-    normH = operator_norm(curve, H, iters=8)
+    # two-point Hessian passes over all its pairs; L and H are <.,.>-self-adjoint, so
+    # Lanczos (one product a step) instead of bidiagonalization (two)
+    normL = operator_norm(curve, L, iters=8, symmetric=True)
+    normH = operator_norm(curve, H, iters=8, symmetric=True)
     Mmat = geometry.M(curve)
     normM = operator_norm(curve, Mmat)
     ks = curve.grad_s(curve.kappa)
