@@ -347,3 +347,15 @@ def test_fields_at_the_last_curve_are_reused_as_computed():
         B[:] = 0.0  # the caller's copy: the next call is unaffected
         force[:] = 0.0
         assert np.array_equal(E.fields(c)[0], B0)
+
+
+def test_neighbour_list_at_the_last_positions_is_reused_as_computed():
+    k = AdhesionKernel(A0=1.0, l_star=0.05, a=1.0)
+    x1, y1 = wobbly_curve(300)
+    x2, y2 = wobbly_curve(300, amp=0.3)
+    for x, y in ((x1, y1), (x2, y2), (x1, y1)):
+        i, j = adhesion_pairs(k, x, y)
+        i0, j0 = pair_list(x, y, k.cutoff_distance(1e-16))
+        assert np.array_equal(i, i0) and np.array_equal(j, j0)
+        i[:] = 0  # the caller's copy: the next call is unaffected
+        assert np.array_equal(adhesion_pairs(k, x, y)[0], i0)
