@@ -37,10 +37,10 @@ the whole bordered system; when a probe shows that working-precision refinement 
 (the shifted core nearly singular), the residual is accumulated in extended precision
 (``np.longdouble``), which brings the forward error down to the rounding of the solution
 itself. The forward-error estimate is one more correction, not applied, with the
-residual in extended precision; when refinement does not need it there, the wide
-two-point blocks (most of the entries, and of the cost) are multiplied in working
-precision, and twice the rounding noise they add to the correction, measured by the
-same probe, is added to the estimate.
+residual in extended precision; where the probe shows that the working-precision
+rounding of the wide two-point blocks (most of the entries, and of the cost) is at most
+half the error being estimated, those blocks are taken in working precision and twice
+their measured noise is added (:mod:`qsa.spectra.refinement`).
 
 Round-off then enters through the factors: the error of a slow eigenvalue scales with
 the order-2 blocks applied to its (smooth) eigenvector, not with ``|J|``.
