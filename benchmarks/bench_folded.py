@@ -7,12 +7,15 @@ resampled to each N), or by default the scenario's crenellated start (not an
 equilibrium: the timings are those of the same linear algebra, the spectrum is not
 physical; it needs N >= 1000 on finite differences). Cases: neighbour lists at Table
 T1's l* on finite differences, N = 1200 ... 10^4, and the long-range l* = 0.5 (all
-pairs) at N = 1000 ... 1400. Per N: interacting pairs, wall time of
-``spectrum(E, c, k=20, sigma=0)`` (assembly, factorization, Arnoldi) and peak traced
-memory; then the fitted exponent of time against N. A size whose pairs would need more
-than 80% of the available memory is skipped with a message.
+pairs) at N = 1000 ... 1400. Per N: interacting pairs, wall and CPU time of
+``spectrum(E, c, k=20, sigma=0)`` (assembly, factorization, Arnoldi) and its peak traced
+memory; then the fitted exponent of the wall time against N. A size whose pairs would
+need more than 80% of the available memory is skipped with a message.
 
-Timings are wall-clock, single-threaded BLAS, noisy on a shared machine.
+Each size is measured in two fresh processes: one timed (memory tracing slows numpy's
+allocations by ~20%), one with ``tracemalloc`` for the peak; neither sees the other's
+cached derivatives. Timings are single-threaded BLAS; wall-clock is noisy on a shared
+machine, CPU time less so.
 
 Run: ``python benchmarks/bench_folded.py [--quick] [--l-star 0.01] [--from FILE]``
 """
@@ -20,9 +23,11 @@ Run: ``python benchmarks/bench_folded.py [--quick] [--l-star 0.01] [--from FILE]
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import time
 import tracemalloc
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
@@ -55,10 +60,34 @@ def energy_of(scenario, L0, method):
 BYTES_PER_PAIR = 1.2e3
 
 
-def measure(scenario, N, method, source):
+def _run(l_star, N, method, source, trace):
+    """One ``spectrum`` in this (fresh) process: wall and CPU seconds, peak traced bytes."""
+    scenario = CHAScenario(l_star=l_star)
     c = state(scenario, N, source)
     L0 = Curve.from_positions(*scenario.initial(N), FiniteDifference(N)).length()
     E = energy_of(scenario, L0, method)
+    if trace:
+        tracemalloc.start()
+    t0, c0 = time.perf_counter(), time.process_time()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = spectrum(E, c, k=20, sigma=0.0)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    peak = tracemalloc.get_traced_memory()[1] if trace else 0
+    if trace:
+        tracemalloc.stop()
+    return {"time": wall, "cpu": cpu, "peak": peak, "n_eig": int(np.size(s.eigenvalues)),
+            "nearest0": float(np.min(np.abs(s.eigenvalues)))}
+
+
+def _fresh(*args):
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return pool.submit(_run, *args).result()
+
+
+def measure(scenario, N, method, source):
+    c = state(scenario, N, source)
+    E = energy_of(scenario, 1.0, method)
     x, y = c.positions()
     P = adhesion_pairs(E.terms()[-1].kernel, x, y, method=method)[0].size
     need, have = BYTES_PER_PAIR * P, available_bytes()
@@ -66,25 +95,21 @@ def measure(scenario, N, method, source):
         print(f"N = {N}: skipped, {P} pairs need about {format_bytes(need)} "
               f"(available {format_bytes(have)})")
         return None
-    tracemalloc.start()
-    t0 = time.perf_counter()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        s = spectrum(E, c, k=20, sigma=0.0)
-    elapsed = time.perf_counter() - t0
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    return {"N": N, "pairs": P, "time": elapsed, "peak_MB": peak / 1e6,
-            "n_eig": int(np.size(s.eigenvalues)), "nearest0": float(np.min(np.abs(s.eigenvalues)))}
+    timed = _fresh(scenario.l_star, N, method, source, False)
+    traced = _fresh(scenario.l_star, N, method, source, True)
+    return {"N": N, "pairs": P, "time": timed["time"], "cpu": timed["cpu"],
+            "peak_MB": traced["peak"] / 1e6, "n_eig": timed["n_eig"],
+            "nearest0": timed["nearest0"]}
 
 
 def report(title, rows):
     rows = [r for r in rows if r is not None]
     print(f"\n{title}")
-    print(f"{'N':>7} {'pairs':>10} {'time s':>9} {'peak MB':>9} {'eigs':>5} {'min|lam|':>10}")
+    print(f"{'N':>7} {'pairs':>10} {'time s':>9} {'CPU s':>9} {'peak MB':>9} {'eigs':>5} "
+          f"{'min|lam|':>10}")
     for r in rows:
-        print(f"{r['N']:>7} {r['pairs']:>10} {r['time']:>9.2f} {r['peak_MB']:>9.1f} "
-              f"{r['n_eig']:>5} {r['nearest0']:>10.3e}")
+        print(f"{r['N']:>7} {r['pairs']:>10} {r['time']:>9.2f} {r['cpu']:>9.2f} "
+              f"{r['peak_MB']:>9.1f} {r['n_eig']:>5} {r['nearest0']:>10.3e}")
     if len(rows) >= 2:
         p = np.polyfit(np.log([r["N"] for r in rows]), np.log([r["time"] for r in rows]), 1)[0]
         print(f"fitted cost exponent (time ~ N^p): p = {p:.2f}")

@@ -139,6 +139,25 @@ def test_block_sparse_products_equal_the_assembled_matrix(dtype):
         BlockSparse([[sp.identity(2), None], [None, None]])
 
 
+def test_block_sparse_partial_products_and_wide_blocks():
+    rng = np.random.default_rng(6)
+    wide_blk = sp.random(4, 40, density=0.5, random_state=rng, format="csr")  # ~20 per row
+    blocks = [[sp.identity(4, format="csr"), wide_blk], [None, sp.identity(40, format="csr")]]
+    B = BlockSparse(blocks)
+    wide = B.wide(entries_per_row=10)
+    assert wide.tolist() == [[False, True], [False, False]]
+    X = rng.standard_normal((44, 3))
+    A = sp.bmat(blocks).toarray()
+    # the two masks split the product; each part is the product of its blocks alone
+    assert np.allclose(B.product(X, wide) + B.product(X, ~wide), A @ X)
+    assert np.allclose(B.product(X, wide)[:4], wide_blk @ X[4:])
+    assert np.all(B.product(X, wide)[4:] == 0)
+    # float64 blocks times an extended-precision x: widened exactly, no rounding to float64
+    Xl = X.astype(np.longdouble) * (1 + np.longdouble(2.0) ** -60)
+    assert B.product(Xl, ~wide).dtype == np.longdouble
+    assert np.all(B.product(Xl, ~wide)[:4] == Xl[:4])
+
+
 @pytest.mark.parametrize("low_rank", [0, 2])
 def test_shift_invert(low_rank):
     H, D = random_reduced(5, low_rank=low_rank)

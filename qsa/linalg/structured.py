@@ -664,6 +664,14 @@ class BlockSparse:
         return sum(b.nnz for row in self.blocks for b in row if b is not None)
 
     def __matmul__(self, x):
+        return self.product(x)
+
+    def product(self, x, mask=None):
+        """``self @ x`` over the blocks where ``mask`` (block rows x block columns) is True.
+
+        The result has the type of ``x`` and the blocks (float64 entries are widened
+        exactly for an ``np.longdouble`` ``x``). Default: every block.
+        """
         x = np.asarray(x)
         out = np.zeros((self.shape[0],) + x.shape[1:],
                        dtype=np.result_type(x.dtype, *(b.dtype for row in self.blocks
@@ -671,9 +679,20 @@ class BlockSparse:
         for i, row in enumerate(self.blocks):
             r0, r1 = self._rows[i], self._rows[i + 1]
             for j, b in enumerate(row):
-                if b is not None:
+                if b is not None and (mask is None or mask[i][j]):
                     out[r0:r1] += b @ x[self._cols[j]:self._cols[j + 1]]
         return out
+
+    def wide(self, entries_per_row=16):
+        """Which blocks hold at least ``entries_per_row`` stored entries per row on average.
+
+        Returns
+        -------
+        ndarray of bool, shape (block rows, block columns)
+        """
+        rows = np.diff(self._rows)
+        return np.array([[b is not None and b.nnz >= entries_per_row * r for b in row]
+                         for row, r in zip(self.blocks, rows, strict=True)], dtype=bool)
 
     def astype(self, dtype):
         """The same blocks with entries of ``dtype`` (e.g. ``np.longdouble``)."""

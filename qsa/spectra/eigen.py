@@ -156,7 +156,7 @@ def solve(energy, curve: Curve, gauge, k=None, sigma=None, rtol=1e-5, lagrange=N
         rigid_basis, cbasis = constraint_bases(curve, cons)
         basis, rigid = rigid_basis, None
         if not deflate:
-            basis, rigid = np.zeros((0, curve.N)), op.ritz(rigid_basis)[0]
+            basis, rigid = np.zeros((0, curve.N)), op.ritz_values(rigid_basis)
         if k is None:
             return dense_normal(op, basis, rtol, vectors=vectors, rigid=rigid, constrain=cbasis)
         sol = certified_eigenpairs(op, basis, k=k, sigma=0.0 if sigma is None else sigma,

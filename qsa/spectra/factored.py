@@ -36,7 +36,11 @@ values are computed separately, by Rayleigh-Ritz of the inverse on ``span R``
 the whole bordered system; when a probe shows that working-precision refinement stalls
 (the shifted core nearly singular), the residual is accumulated in extended precision
 (``np.longdouble``), which brings the forward error down to the rounding of the solution
-itself. The forward-error estimates always use extended-precision residuals.
+itself. The forward-error estimate is one more correction, not applied, with the
+residual in extended precision; where the probe shows that the working-precision
+rounding of the wide two-point blocks (most of the entries, and of the cost) is at most
+half the error being estimated, those blocks are taken in working precision and twice
+their measured noise is added (:mod:`qsa.spectra.refinement`).
 
 Round-off then enters through the factors: the error of a slow eigenvalue scales with
 the order-2 blocks applied to its (smooth) eigenvector, not with ``|J|``.
@@ -72,6 +76,7 @@ from qsa import geometry
 from qsa.curve import Curve
 from qsa.linalg import BlockSparse, Factorization, ReducedHessian, SparsePlusLowRank, factorize
 from qsa.spectra.capacitance import CapacitanceCore, use_capacitance
+from qsa.spectra.refinement import BorderedSystem, Probe, column_norms, probe, refined_solve
 
 __all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
 
@@ -269,13 +274,32 @@ class FactoredNormalOperator:
         vectors : ndarray, shape (N, m)
         errors : ndarray, shape (m,)
         """
+        vals, vecs = self._rayleigh_ritz(R)
+        return vals, vecs, self.rounding_error(vecs) + _EPS * np.abs(vals)
+
+    def ritz_values(self, R):
+        """The Ritz values of :meth:`ritz` alone, without their error estimates.
+
+        Enough where they only place a shift (the rounding bound costs more passes
+        over the factors than the values).
+
+        Parameters
+        ----------
+        R : ndarray, shape (m, N)
+
+        Returns
+        -------
+        ndarray, shape (m,)
+        """
+        return self._rayleigh_ritz(R)[0]
+
+    def _rayleigh_ritz(self, R):
         R = np.asarray(R, dtype=float).reshape(-1, self.N)
         if R.shape[0] == 0:
-            return np.zeros(0), np.zeros((self.N, 0)), np.zeros(0)
+            return np.zeros(0), np.zeros((self.N, 0))
         B = self.quadratic(R.T)
         vals, Q = np.linalg.eigh(0.5 * (B + B.T))
-        vecs = R.T @ Q
-        return vals, vecs, self.rounding_error(vecs) + _EPS * np.abs(vals)
+        return vals, R.T @ Q
 
     # ------------------------------------------------------ rounding estimate
     def rounding_error(self, phi, chi=None):
@@ -496,8 +520,8 @@ class ShiftInvert:
         if self._lu is None:
             self._lu = factorize(core.tocsc() if sparse else core, B1, B2, D)
         self._free = None
-        self._ext = None
-        self._probe: dict = {}
+        self._system = BorderedSystem(core, B1, B2, D)
+        self._probes: dict = {}
         self.last_correction = np.zeros(0)
 
     @property
@@ -505,60 +529,17 @@ class ShiftInvert:
         """``(N, N)``: the operator acts on nodal vectors."""
         return (self.op.N, self.op.N)
 
-    def _extended(self, p):
-        """The bordered matrix's blocks in extended precision (``np.longdouble``), cached."""
-        if self._ext is None:
-            ld = np.longdouble
-            core = self._core.astype(ld)
-            self._ext = (core, self._B1.astype(ld), self._B2.astype(ld), self._D.astype(ld))
-        core, B1, B2, D = self._ext
-        return core, B1[:, :p], B2[:p], D[:p, :p]
-
-    def _residual(self, rhs, x, p):
-        """``rhs - A x`` for the core with the first ``p`` border columns, in extended precision.
-
-        Mixed-precision iterative refinement: with the residual accumulated in extended
-        precision, refinement converges to the solution's rounding level ``eps |x|``
-        instead of stalling at ``cond(A) eps |x|`` (the near-zero eigenvalues make the
-        shifted system nearly singular).
-        """
-        core, B1, B2, D = self._extended(p)
-        n = core.shape[0]
-        xl = np.asarray(x, dtype=np.longdouble)
-        y = core @ xl[:n] + B1 @ xl[n:]
-        z = B2 @ xl[:n] + D @ xl[n:]
-        return (np.asarray(rhs, dtype=np.longdouble) - np.concatenate([y, z], axis=0)).astype(float)
-
-    def _residual_double(self, rhs, x, p):
-        """``rhs - A x`` in working precision (classical iterative refinement)."""
-        n = self._core.shape[0]
-        y = self._core @ x[:n] + self._B1[:, :p] @ x[n:]
-        z = self._B2[:p] @ x[:n] + self._D[:p, :p] @ x[n:]
-        return rhs - np.concatenate([y, z], axis=0)
-
-    def _needs_extended(self, lu, p):
-        """Whether refinement needs extended-precision residuals for this factorization.
-
-        A probe: one random right-hand side refined in working precision; if one more
-        correction with the residual in extended precision still changes the solution
-        by more than ``1e-10`` of its size (the shifted system is nearly singular), every
-        refinement uses extended precision (several times slower for dense cores).
-        """
+    def _probe(self, lu, p) -> Probe:
+        """The refinement probe of these factors (:func:`~qsa.spectra.refinement.probe`)."""
         key = (id(lu), p)
-        if key not in self._probe:
-            N = self.op.N
-            rhs = np.zeros(self._core.shape[0] + p)
-            rhs[:N] = np.random.default_rng(3).standard_normal(N) * self.op.w
-            x = lu.solve(rhs)
-            x = x + lu.solve(self._residual_double(rhs, x, p))
-            dx = lu.solve(self._residual(rhs, x, p))
-            self._probe[key] = bool(np.linalg.norm(dx) > 1e-10 * np.linalg.norm(x))
-        return self._probe[key]
+        if key not in self._probes:
+            self._probes[key] = probe(lu.solve, self._system, p, self.op.w)
+        return self._probes[key]
 
     def _refined(self, lu, p, b, refine, estimate):
         N = self.op.N
         b = np.asarray(b, dtype=float)
-        rhs = np.zeros((self._core.shape[0] + p,) + b.shape[1:])
+        rhs = np.zeros((self._system.n + p,) + b.shape[1:])
         rhs[:N] = b
         if refine == 0 and not estimate and self._capacitance is not None:
             # phi alone is wanted, and the border reads only the phi and psi rows
@@ -567,15 +548,13 @@ class ShiftInvert:
                 return lu.solve(rhs)[:N]
             finally:
                 self._capacitance.phi_only = False
-        x = lu.solve(rhs)
-        residual = self._residual if self._needs_extended(lu, p) else self._residual_double
-        for _ in range(refine):
-            x = x + lu.solve(residual(rhs, x, p))
+        x, dx, noise = refined_solve(lu.solve, self._system, p, rhs, refine,
+                                     self._probe(lu, p), self.op.w, estimate)
         if estimate:
-            dx = lu.solve(self._residual(rhs, x, p))
-            w = self.op.w if b.ndim == 1 else self.op.w[:, None]
-            self.last_correction = np.sqrt(np.sum(w * dx[:N] ** 2, axis=0))
-        self._last_core = x[: self._core.shape[0]]
+            self._last_dx, self._last_noise = dx, noise
+            self.last_correction = (column_norms(dx, self.op.w)
+                                    + noise * column_norms(x, self.op.w))
+        self._last_core = x[: self._system.n]
         return x[:N]
 
     def _solution_chi(self):
@@ -623,7 +602,7 @@ class ShiftInvert:
 
         Rayleigh-Ritz for ``K = (W J - sigma W)^{-1} W`` (without the deflation; with the
         constraints, ``R`` in their complement) on the span of the ``<.,.>``-orthonormal
-        rows ``R``: ``K`` smooths, so the rounding noise
+        rows ``R`` (:meth:`ritz_pairs`): ``K`` smooths, so the rounding noise
         of the rigid fields (computed from the node positions) does not enter, as it
         does in the direct quadratic form (:meth:`FactoredNormalOperator.ritz`), whose
         error grows like ``eps^2 |J|``.
@@ -638,23 +617,49 @@ class ShiftInvert:
         vectors : ndarray, shape (N, m)
         errors : ndarray, shape (m,)
         """
-        w = self.op.w
-        m = R.shape[0]
-        if m == 0:
+        if R.shape[0] == 0:
             return np.zeros(0), np.zeros((self.op.N, 0)), np.zeros(0)
-        X = self.solve_free(w[:, None] * R.T)
-        A = R @ (w[:, None] * X)
+        vals, vecs, err = self.ritz_pairs(R.T, free=True)
+        return vals, vecs, err.total
+
+    def ritz_pairs(self, X, free=False):
+        """Rayleigh-Ritz of ``K = (W J - sigma W)^{-1} W`` on ``span X``, with error estimates.
+
+        One refined solve of the columns with its forward-error estimate: the Ritz
+        vectors ``X Q`` (``Q`` the orthogonal eigenvectors of ``X^T W K X``) have the
+        products ``(K X) Q``, the corrections and the solution's ``chi`` of the same
+        combinations, so their errors (:meth:`errors`) need no second solve.
+
+        Parameters
+        ----------
+        X : ndarray, shape (N, k)
+            ``<.,.>``-orthonormal columns.
+        free : bool
+            Solve without the deflation (:meth:`solve_free`).
+
+        Returns
+        -------
+        values : ndarray, shape (j,)
+            ``sigma + 1 / nu`` for the Ritz values ``nu != 0`` of ``K``.
+        vectors : ndarray, shape (N, j)
+            ``<.,.>``-normalised.
+        errors : EigenErrors
+        """
+        w = self.op.w
+        KX = (self.solve_free if free else self.solve)(w[:, None] * X, estimate=True)
+        A = X.T @ (w[:, None] * KX)
         nu, Q = np.linalg.eigh(0.5 * (A + A.T))
-        vecs = R.T @ Q
-        KX = self.solve_free(w[:, None] * vecs, estimate=True)
-        chi = self._solution_chi() / nu[None, :]
+        keep = nu != 0
+        nu, Q = nu[keep], Q[:, keep]
+        vecs = X @ Q
+        scale = 1.0 / column_norms(vecs, w)
+        Q = Q * scale[None, :]
+        vecs = vecs * scale[None, :]
+        correction = (column_norms(self._last_dx @ Q, w)
+                      + self._last_noise * column_norms(self._last_core[:self.op.N] @ Q, w))
+        chi = self._solution_chi() @ Q
         vals = self.sigma + 1.0 / nu
-        res = KX - nu[None, :] * vecs
-        rn = np.sqrt(np.sum(w[:, None] * res**2, axis=0)) + self.last_correction
-        den = np.abs(nu) * (np.abs(nu) - rn)
-        err = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
-        err = err + self.op.rounding_error(vecs, chi) + _EPS * np.abs(vals)
-        return vals, vecs, err
+        return vals, vecs, self._errors(vals, vecs, KX @ Q, correction, chi)
 
     def operator(self):
         """``K = (W J - sigma W)^{-1} W`` as a ``scipy.sparse.linalg.LinearOperator``."""
@@ -674,13 +679,18 @@ class ShiftInvert:
         -------
         EigenErrors
         """
-        w = self.op.w
         lam = np.asarray(eigenvalues, dtype=float)
+        KV = self.solve(self.op.w[:, None] * vectors, estimate=True)
+        return self._errors(lam, vectors, KV, self.last_correction, self._solution_chi())
+
+    def _errors(self, lam, vectors, KV, correction, chi):
+        """:class:`EigenErrors` from ``K V`` (a solve with forward error ``correction``)
+        and the solve's ``chi`` for ``K V``."""
+        w = self.op.w
         nu = 1.0 / (lam - self.sigma)
-        r = self.solve(w[:, None] * vectors, estimate=True) - nu[None, :] * vectors
-        chi = self._solution_chi() / nu[None, :]
-        rn = np.sqrt(np.sum(w[:, None] * r * r, axis=0)) + self.last_correction
+        r = KV - nu[None, :] * vectors
+        rn = np.sqrt(np.sum(w[:, None] * r * r, axis=0)) + correction
         den = np.abs(nu) * (np.abs(nu) - rn)
         res = np.where(den > 0, rn / np.where(den > 0, den, 1.0), np.inf)
-        rnd = self.op.rounding_error(vectors, chi)
+        rnd = self.op.rounding_error(vectors, chi / nu[None, :])
         return EigenErrors(res, rnd, res + rnd + _EPS * np.abs(lam))

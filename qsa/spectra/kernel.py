@@ -275,9 +275,10 @@ def build_kernel_report(curve, LH, op, basis, n_kernel, kernel_tol, energy=None)
     L = LH.matrix
     H = LH.energy_hessian
     # scales of the relative residuals below: a digit is enough, and each product with a
-    # two-point Hessian passes over all its pairs
-    normL = operator_norm(curve, L, iters=8)
-    normH = operator_norm(curve, H, iters=8)
+    # two-point Hessian passes over all its pairs; L and H are <.,.>-self-adjoint, so
+    # Lanczos (one product a step) instead of bidiagonalization (two)
+    normL = operator_norm(curve, L, iters=8, symmetric=True)
+    normH = operator_norm(curve, H, iters=8, symmetric=True)
     Mmat = geometry.M(curve)
     normM = operator_norm(curve, Mmat)
     ks = curve.grad_s(curve.kappa)
@@ -377,7 +378,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None,
             sol = certified_eigenpairs(op, basis, k=k, sigma=0.0, constrain=cbasis)
         else:
             sol = certified_eigenpairs(op, np.zeros((0, curve.N)), k=k, sigma=0.0,
-                                       rigid=op.ritz(basis)[0], constrain=cbasis)
+                                       rigid=op.ritz_values(basis), constrain=cbasis)
         n_kernel, tol = kernel_size(sol.values, sol.errors, sol.is_kernel)
         if kernel_tol is not None:
             tol = real_number(kernel_tol, "kernel_tol", positive=True)

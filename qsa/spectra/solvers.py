@@ -104,10 +104,12 @@ def _dense_inverse(op, si, R):
 def _arpack(op, si, R, k, seed=0):
     """The ``k`` eigenpairs nearest the shift by ARPACK on the inverse ``si``.
 
-    When ``si`` solves through a capacitance (:mod:`qsa.spectra.capacitance`), whose solves
-    are accurate to about ``1e-8`` before refinement and whose refinement costs two more
-    passes over the two-point blocks, ARPACK runs on the unrefined solves and its Ritz
-    subspace is then polished with refined ones (:func:`_polish`).
+    Returns ``(values, vectors, errors)``, ``errors`` an :class:`EigenErrors` or None
+    (not computed). When ``si`` solves through a capacitance
+    (:mod:`qsa.spectra.capacitance`), whose solves are accurate to about ``1e-8`` before
+    refinement and whose refinement costs two more passes over the two-point blocks,
+    ARPACK runs on the unrefined solves and its Ritz subspace is then polished with
+    refined ones (:func:`_polish`), which also give the errors.
     """
     N = op.N
     w = op.w
@@ -121,26 +123,25 @@ def _arpack(op, si, R, k, seed=0):
     vals, vecs = spla.eigsh(A, k=k, M=sp.diags(w), sigma=si.sigma, OPinv=OPinv, which="LM",
                             v0=v0)
     if fast:
-        vals, vecs = _polish(si, vecs)
-    return vals, vecs
+        return _polish(si, vecs)
+    return vals, vecs, None
 
 
 def _polish(si, V):
-    """One step of subspace iteration and Rayleigh-Ritz with refined solves.
+    """One step of subspace iteration and Rayleigh-Ritz with refined solves, with errors.
 
     ``V`` spans the Ritz subspace of an inverse ``K = (W J - sigma W)^{-1} W`` known to
     a small relative error ``delta``: one product with the refined ``K`` damps the
     subspace's components along the other eigenvectors by ``|nu_j / nu_i|`` (most of them
     far from the shift, so strongly), and Rayleigh-Ritz with the refined ``K`` on the
-    result makes the eigenvalue error second order in what is left.
+    result makes the eigenvalue error second order in what is left. The Rayleigh-Ritz
+    solve also gives the Ritz vectors' residuals and forward errors
+    (:meth:`~qsa.spectra.factored.ShiftInvert.ritz_pairs`).
     """
     w = si.op.w
     rw = np.sqrt(w)[:, None]
     X = np.linalg.qr(rw * si.solve(w[:, None] * V))[0] / rw  # <.,.>-orthonormal columns
-    Kc = X.T @ (w[:, None] * si.solve(w[:, None] * X))
-    nu, Y = np.linalg.eigh(0.5 * (Kc + Kc.T))
-    keep = nu != 0
-    return si.sigma + 1.0 / nu[keep], X @ Y[:, keep]
+    return si.ritz_pairs(X)
 
 
 def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0,
@@ -172,29 +173,31 @@ def certified_eigenpairs(op: FactoredNormalOperator, R, k=None, sigma=0.0,
         Sorted by distance to ``sigma``. Raises ``numpy.linalg.LinAlgError`` or an
         ARPACK error when a solve fails.
     """
-    N, m = op.N, R.shape[0]
+    N = op.N
     Rc = np.zeros((0, N)) if constrain is None else np.asarray(constrain, float).reshape(-1, N)
     rows = np.vstack([R, Rc])
-    estimate = op.ritz(R)[0] if rigid is None else np.asarray(rigid, dtype=float)
+    estimate = op.ritz_values(R) if rigid is None else np.asarray(rigid, dtype=float)
     si = _shift(op, sigma, R, np.append(estimate, 0.0), Rc)
     rvals, rvecs, rerr = si.kernel_ritz(R)
     free = N - rows.shape[0]
     # a few more than asked: the shift may have moved, and the rigid Ritz values compete
     want = free if k is None else min(int(k) + 2, free - 1)
+    errs = None
     if k is None or N <= DENSE_INVERSE_LIMIT or want >= free // 2:
         vals, vecs = _dense_inverse(op, si, rows)
         order = np.argsort(np.abs(vals - sigma))[:want]
         vals, vecs = vals[order], vecs[:, order]
         method = "factored dense"
     else:
-        vals, vecs = _arpack(op, si, rows, want)
+        vals, vecs, errs = _arpack(op, si, rows, want)
         method = "factored shift-invert"
-    vecs = vecs / np.sqrt(np.sum(op.w[:, None] * vecs**2, axis=0))
-    err = si.errors(vals, vecs).total
+    if errs is None:
+        vecs = vecs / np.sqrt(np.sum(op.w[:, None] * vecs**2, axis=0))
+        errs = si.errors(vals, vecs)
     values = np.concatenate([rvals, vals])
     vectors = np.hstack([rvecs, vecs])
-    errors = np.concatenate([rerr, err])
-    is_kernel = np.concatenate([np.ones(m, bool), np.zeros(vals.size, bool)])
+    errors = np.concatenate([rerr, errs.total])
+    is_kernel = np.concatenate([np.ones(rvals.size, bool), np.zeros(vals.size, bool)])
     order = np.argsort(np.abs(values - sigma), kind="stable")
     if k is not None:
         order = order[: int(k)]

@@ -387,7 +387,7 @@ def sector_spectrum(energy, curve: Curve, symmetry=None, k=None, sigma=0.0, sect
     op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
     R, Rc = constraint_bases(curve, cons)
     w = curve.dsigma
-    si = _shift(op, float(sigma), R, np.append(op.ritz(R)[0], 0.0), Rc)
+    si = _shift(op, float(sigma), R, np.append(op.ritz_values(R), 0.0), Rc)
     kvals, _, kerr = si.kernel_ritz(R)
     vals, vecs, secs = [], [], []
     complete = True

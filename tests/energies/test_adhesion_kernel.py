@@ -330,3 +330,32 @@ def test_parallel_strands_force_and_B_closed_forms(a, D):
     assert F[mid, 1] == pytest.approx(force, rel=1e-10, abs=1e-12 * A0 / l_star)
     assert abs(F[mid, 0]) < 1e-12 * A0 / l_star  # symmetric about the middle node
     assert B[mid] == pytest.approx(b, rel=1e-10)
+
+
+def test_fields_at_the_last_curve_are_reused_as_computed():
+    from qsa import Curve, FiniteDifference
+    from qsa.energies import Adhesion
+
+    E = Adhesion(A0=10.0, l_star=0.3, a=1.0)
+    c1 = Curve.polar(lambda t: 1 + 0.2 * np.cos(3 * t), FiniteDifference(90))
+    c2 = Curve.polar(lambda t: 1 + 0.25 * np.cos(3 * t), FiniteDifference(90))
+    for c in (c1, c2, c1):
+        B, force = E.fields(c)
+        x, y = c.positions()
+        B0, force0 = adhesion_fields(E.kernel, x, y, c.dsigma)
+        assert np.array_equal(B, B0) and np.array_equal(force, force0)
+        B[:] = 0.0  # the caller's copy: the next call is unaffected
+        force[:] = 0.0
+        assert np.array_equal(E.fields(c)[0], B0)
+
+
+def test_neighbour_list_at_the_last_positions_is_reused_as_computed():
+    k = AdhesionKernel(A0=1.0, l_star=0.05, a=1.0)
+    x1, y1 = wobbly_curve(300)
+    x2, y2 = wobbly_curve(300, amp=0.3)
+    for x, y in ((x1, y1), (x2, y2), (x1, y1)):
+        i, j = adhesion_pairs(k, x, y)
+        i0, j0 = pair_list(x, y, k.cutoff_distance(1e-16))
+        assert np.array_equal(i, i0) and np.array_equal(j, j0)
+        i[:] = 0  # the caller's copy: the next call is unaffected
+        assert np.array_equal(adhesion_pairs(k, x, y)[0], i0)

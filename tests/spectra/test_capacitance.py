@@ -12,6 +12,7 @@ from qsa.spectra import (
     FactoredNormalOperator,
     certified_eigenpairs,
     lagrange_hessian,
+    refinement,
     rigid_normal_basis,
 )
 from qsa.spectra import capacitance as cap
@@ -98,3 +99,70 @@ def test_unrefined_solve_returns_phi_of_the_refined_one(forced):
     assert np.linalg.norm(quick - fine) <= 1e-7 * np.linalg.norm(fine)
     assert not si._capacitance.phi_only
     assert np.abs(R @ (c.dsigma * quick)).max() <= 1e-8 * np.abs(quick).max()
+
+
+def _full_solution(si, b):
+    """The refined solution of the whole bordered system for ``b`` (as ``solve`` makes it)."""
+    p = si._B1.shape[1]
+    rhs = np.zeros((si._system.n + p,) + b.shape[1:])
+    rhs[: si.op.N] = b
+    x = si._lu.solve(rhs)
+    return rhs, x + si._lu.solve(si._system.residual(rhs, x, p))
+
+
+@pytest.mark.parametrize("mixed", [True, False])
+def test_forward_error_estimate_covers_the_extended_precision_correction(forced, monkeypatch,
+                                                                         mixed):
+    monkeypatch.setattr(refinement, "MIXED_NOISE", np.inf if mixed else 0.0)
+    c, op = _operator(300, 0.1)
+    si = ShiftInvert(op, 0.0)
+    assert si._system.wide is not None
+    w = c.dsigma
+    s = c.grid.s
+    B = np.column_stack([w * np.cos(2 * np.pi * j * s) for j in range(2, 8)]
+                        + [w * np.random.default_rng(4).standard_normal(c.N)])
+    si.solve(B, estimate=True)
+    found = si._probe(si._lu, si._B1.shape[1])
+    assert not found.extended and found.mixed is mixed
+    assert 0 < found.noise < 1e-12 and 0 < found.accuracy < 1e-12
+    # the correction with the whole residual in extended precision
+    p = si._B1.shape[1]
+    rhs, x = _full_solution(si, B)
+    dx = si._lu.solve(si._system.residual(rhs, x, p, "extended"))
+    ext = np.sqrt(np.sum(w[:, None] * dx[: c.N] ** 2, axis=0))
+    if not mixed:  # the extended correction itself
+        assert np.allclose(si.last_correction, ext, rtol=1e-12, atol=0)
+        return
+    assert np.all(si.last_correction >= ext)
+    # the wide blocks in working precision move the correction by the probe's noise level
+    dxw = si._lu.solve(si._system.residual(rhs, x, p, "mixed"))
+    moved = np.sqrt(np.sum(w[:, None] * (dxw - dx)[: c.N] ** 2, axis=0))
+    xn = np.sqrt(np.sum(w[:, None] * x[: c.N] ** 2, axis=0))
+    assert np.all(moved <= 2 * found.noise * xn)
+
+
+def test_ritz_pairs_errors_equal_those_of_a_second_solve(forced):
+    c, op = _operator(300, 0.1)
+    R = np.linalg.qr((rigid_normal_basis(c) * np.sqrt(c.dsigma)).T)[0].T / np.sqrt(c.dsigma)
+    si = ShiftInvert(op, 0.0, deflate=R)
+    w, rw = c.dsigma, np.sqrt(c.dsigma)[:, None]
+    s = c.grid.s
+    V = np.column_stack([np.cos(2 * np.pi * j * s) for j in range(2, 10)])
+    V -= R.T @ (R @ (w[:, None] * V))
+    X = np.linalg.qr(rw * si.solve(w[:, None] * V))[0] / rw
+    X = np.linalg.qr(rw * si.solve(w[:, None] * X))[0] / rw  # two steps towards the slowest
+    vals, vecs, err = si.ritz_pairs(X)
+    assert np.allclose(np.sum(w[:, None] * vecs**2, axis=0), 1.0)
+    # the errors from the combined solve are those of a fresh solve of the Ritz vectors
+    again = si.errors(vals, vecs)
+    # (not yet converged: the residuals are far above the solves' forward errors)
+    assert np.all(err.residual > 1e-8 * np.abs(vals))
+    assert np.allclose(err.residual, again.residual, rtol=1e-6)
+    assert np.allclose(err.rounding, again.rounding, rtol=1e-6)
+    # kernel_ritz: Rayleigh-Ritz of the inverse without the deflation, on span R
+    kv, kvec, kerr = si.kernel_ritz(R)
+    A = R @ (w[:, None] * si.solve_free(w[:, None] * R.T))
+    nu = np.linalg.eigvalsh(0.5 * (A + A.T))
+    assert np.allclose(kv, si.sigma + 1.0 / nu, rtol=1e-10, atol=0)
+    assert kvec.shape == (c.N, R.shape[0]) and np.all(kerr > 0)
+    assert np.array_equal(op.ritz_values(R), op.ritz(R)[0])

@@ -51,3 +51,22 @@ def test_spectrum_accepts_canham_helfrich_adhesion(grid):
         s = spectrum(_cha(c, 0.1), c, k=6)
     assert s.success and s.eigenvalues.size == 6
     assert np.all(s.errors <= 1e-6 * np.maximum(np.abs(s.eigenvalues), 1.0))
+
+
+@pytest.mark.parametrize("grid", [Fourier(65), FiniteDifference(200)])
+def test_lagrangian_and_energy_hessians_are_self_adjoint_for_the_kernel_report_norms(grid):
+    # the kernel report takes their norms by Lanczos, which needs <.,.>-self-adjointness
+    from qsa.spectra import operator_norm
+
+    c = Curve.polar(lambda t: 1 + 0.2 * np.cos(3 * t), grid)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        LH = lagrange_hessian(_cha(c, 0.3), c)
+    w2 = np.concatenate([c.dsigma, c.dsigma])
+    X = np.random.default_rng(1).standard_normal((2 * c.N, 2))
+    for A in (LH.matrix, LH.energy_hessian):
+        AX = A @ X
+        assert abs(X[:, 0] @ (w2 * AX[:, 1]) - X[:, 1] @ (w2 * AX[:, 0])) <= 1e-10 * np.abs(
+            X[:, 0] @ (w2 * AX[:, 1]))
+        lanczos = operator_norm(c, A, iters=8, symmetric=True)
+        assert abs(lanczos - operator_norm(c, A, iters=30)) <= 1e-3 * lanczos
