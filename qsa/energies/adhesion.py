@@ -370,9 +370,28 @@ def _dense_pairs(N):
     return i, j
 
 
+class _LastCall:
+    """The value computed for the last key asked for, and only that (memory stays bounded).
+
+    The analysis of one curve asks for the same pair list, fields and derivatives several
+    times, each a pass over all pairs; the key holds the exact bytes of every input, so a
+    hit returns what the computation would return.
+    """
+
+    def __init__(self):
+        self._key = None
+        self._value = None
+
+    def get(self, key, compute):
+        if self._key is None or self._key != key:
+            value = compute()
+            self._key, self._value = key, value
+        return self._value
+
+
 # The neighbour list at the last positions asked for: the energy's fields and its
 # derivatives at one curve each need it (a k-d tree query, ~0.5 s at 4M pairs).
-_LAST_PAIRS: dict = {}
+_LAST_PAIRS = _LastCall()
 
 
 def adhesion_pairs(kernel, x, y, *, method="neighbours", rel=1e-16):
@@ -407,11 +426,7 @@ def adhesion_pairs(kernel, x, y, *, method="neighbours", rel=1e-16):
         cutoff = kernel.cutoff_distance(rel)
         xa, ya = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         key = (cutoff, xa.tobytes(), ya.tobytes())
-        hit = _LAST_PAIRS.get(key)
-        if hit is None:
-            hit = pair_list(x, y, cutoff)
-            _LAST_PAIRS.clear()
-            _LAST_PAIRS[key] = hit
+        hit = _LAST_PAIRS.get(key, lambda: pair_list(x, y, cutoff))
         return hit[0].copy(), hit[1].copy()
     if method == "dense":
         x, _ = _check_positions(x, y)
@@ -749,10 +764,10 @@ def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"
 # The derivatives at the last curve asked for: an analysis asks for the gradient, the
 # Hessian and Hessian-vector products at one curve several times, and each set costs a
 # pass over all pairs. One entry, keyed by the kernel and the curve's arrays.
-_LAST_DERIVATIVES: dict = {}
+_LAST_DERIVATIVES = _LastCall()
 # Likewise the fields (B, force) at the last curve: its residual, multipliers and
 # residual floor each ask for the gradient again.
-_LAST_FIELDS: dict = {}
+_LAST_FIELDS = _LastCall()
 
 
 @dataclass(frozen=True)
@@ -841,11 +856,8 @@ class Adhesion(Energy):
         """
         x, y, w = self._data(c)
         key = (self.kernel, self.method, x.tobytes(), y.tobytes(), np.asarray(w).tobytes())
-        hit = _LAST_FIELDS.get(key)
-        if hit is None:
-            hit = adhesion_fields(self.kernel, x, y, w, method=self.method)
-            _LAST_FIELDS.clear()
-            _LAST_FIELDS[key] = hit
+        hit = _LAST_FIELDS.get(key, lambda: adhesion_fields(self.kernel, x, y, w,
+                                                            method=self.method))
         return hit[0].copy(), hit[1].copy()
 
     def extrinsic_gradient(self, c) -> np.ndarray:
@@ -893,13 +905,8 @@ class Adhesion(Energy):
         x, y = c.positions()
         key = (self.kernel, self.method, type(c.grid).__name__, c.N, x.tobytes(), y.tobytes(),
                np.asarray(c.kappa).tobytes(), np.asarray(c.g).tobytes())
-        hit = _LAST_DERIVATIVES.get(key)
-        if hit is None:
-            hit = adhesion_derivatives(self.kernel, c, adhesion_pairs(self.kernel, x, y,
-                                                                      method=self.method))
-            _LAST_DERIVATIVES.clear()
-            _LAST_DERIVATIVES[key] = hit
-        return hit
+        return _LAST_DERIVATIVES.get(key, lambda: adhesion_derivatives(
+            self.kernel, c, adhesion_pairs(self.kernel, x, y, method=self.method)))
 
     def gradient(self, c) -> np.ndarray:
         """``nabla_I E_A`` in ``<f, h> = int f h dsigma``: the discrete energy's exact derivative.
