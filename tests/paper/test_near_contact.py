@@ -1,0 +1,86 @@
+"""Near-contact spacing of polished folded CHA equilibria (s:NSI): d -> l* sqrt(a^2 + 1/2)."""
+
+import numpy as np
+import pytest
+
+from qsa.energies import AdhesionKernel
+from qsa.paper.near_contact import (
+    dumbbell,
+    near_contact_study,
+    near_contact_sweep,
+    paired_dumbbell,
+    sheet_spacing,
+)
+
+
+def test_dumbbell_is_a_closed_ccw_curve_with_parallel_sheets():
+    neck, d, R, r = 2.0, 0.06, 0.25, 0.05
+    x, y = dumbbell(neck, d, R, r, 4000)
+    chords = np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
+    assert np.ptp(chords) < 1e-4 * chords.mean()          # closed, equal arc length
+    phi = np.arccos((d / 2 + r) / (R + r))
+    length = 2 * neck + 2 * (2 * r * phi + R * (np.pi + 2 * phi))
+    assert chords.sum() == pytest.approx(length, rel=1e-5)  # chords: -h^2 kappa^2 / 24
+    area = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+    assert area > 0                                       # counter-clockwise
+    sheet = np.abs(x) < neck / 2
+    assert np.allclose(np.abs(y[sheet]), d / 2, atol=1e-12)
+    h = x.size // 2                                       # symmetric under the half turn
+    assert np.allclose(np.roll(x, h), -x, atol=1e-12) and np.allclose(np.roll(y, h), -y, atol=1e-12)
+    with pytest.raises(ValueError, match="radius"):
+        dumbbell(neck, d, 0.02, r, 100)
+    with pytest.raises(ValueError, match="N"):
+        dumbbell(neck, d, R, r, 5)
+
+
+def test_spacing_of_a_polished_dumbbell_tends_to_d_star():
+    # a dumbbell polished at l* = 0.1 (Table T1's eps, beta, A0, a) and followed to
+    # l* = 0.2: the sheets sit at l* sqrt(a^2 + 1/2) in the middle of the pair, the
+    # deviation decreasing with l*; l* sqrt(a^2 + 1) (the kernel's minimum) is 15% off
+    start = paired_dumbbell(0.1, N=201, t_flow=0.5)
+    assert start.polished.success and start.relative_residual <= 1e-9
+    sw = near_contact_sweep(start, [0.2, 0.1], nodes_per_l_star=4, N_min=201)
+    assert sw.success, sw.message
+    p02, p01 = sw.points
+    for p in sw.points:
+        assert p.relative_residual <= 1e-9 and p.n_pairs == 1
+        assert p.target == pytest.approx(p.l_star * np.sqrt(1.5))
+        assert p.grid_change < 1e-6                        # N vs 2N - 1
+        assert p.pair_length > 10 * p.target               # a long pair, not a contact
+        assert abs(p.spacing / (p.l_star * np.sqrt(2.0)) - 1) > 0.1
+    assert abs(p02.relative_error) < 1e-4
+    assert abs(p01.relative_error) < abs(p02.relative_error) / 10
+    assert sw.order > 1
+    # where the sheets turn apart into the lobes the spacing dips below d*
+    assert -0.1 < p01.minimum / p01.target - 1 < -0.005
+    # the measurement itself: the polished curve's pair, d* from the kernel
+    sp = sheet_spacing(sw.curves[1], 0.1)
+    assert sp.target == AdhesionKernel(40.0, 0.1, 1.0).pair_separation
+    assert sp.mid_separations[0] == p01.spacing
+    assert {"order", "points", "params"} <= set(sw.summary())
+    assert sw.table().count("\n") == 3
+
+
+def test_sweep_refuses_bad_input():
+    class Unpolished:
+        class polished:
+            success = False
+
+    with pytest.raises(ValueError, match="start"):
+        near_contact_sweep(Unpolished(), [0.1])
+
+
+@pytest.mark.slow
+def test_near_contact_sweep_from_l_star_0_2_to_0_025():
+    # the documented sweep (docs/paper-results.md): Table T1's eps, beta, A0, a, a fixed
+    # perimeter target, 10 nodes per l*, each state checked on Fourier(2N - 1)
+    sw = near_contact_study()
+    assert sw.success, sw.message
+    assert [p.l_star for p in sw.points] == [0.2, 0.1, 0.05, 0.025]
+    err = np.array([abs(p.relative_error) for p in sw.points])
+    for p in sw.points:
+        assert p.relative_residual <= 1e-9 and p.n_pairs == 1
+        assert p.grid_change < 1e-7
+        assert p.N >= 10 * 7.0 / p.l_star
+    assert err[0] < 1e-4 and np.all(err[1:] < err[0] / 10)
+    assert np.all(err[1:] < 1e-6)
