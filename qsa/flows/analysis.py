@@ -318,6 +318,10 @@ class SheetPairs:
         they turn apart, which is where the near-contact analysis applies. At the
         ends of a pair the sheets overshoot and diverge, so the minimum and the
         median mix in the turning regions.
+    profiles : list of tuple
+        ``(arc, separation)`` of each pair: the separation at the paired nodes of its
+        first sheet, in order along the curve, against their arc length from the
+        first of them (mean chord times the number of nodes between).
     """
 
     n_pairs: int
@@ -329,6 +333,7 @@ class SheetPairs:
     target: float = float("nan")
     min_separations: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mid_separations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    profiles: list = field(default_factory=list, repr=False)
 
     @property
     def ratio(self) -> float:
@@ -449,7 +454,7 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
         for node in nodes:
             key = (run_of[node], run_of[partner[k, node]], k)
             groups.setdefault(key, []).append(node)
-    seps, mins, mids, lens, run_list, seen = [], [], [], [], [], set()
+    seps, mins, mids, lens, run_list, seen, profiles = [], [], [], [], [], set(), []
     for (ra, rb, k), nodes in sorted(groups.items()):
         if ra < 0 or rb < 0 or (rb, ra) in seen:
             continue
@@ -459,9 +464,12 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
         seen.add((ra, rb))
         seps.append(float(np.median(dist[k, nodes])))
         mins.append(float(np.min(dist[k, nodes])))
-        along = nodes[np.argsort((nodes - runs[ra][0]) % N)]  # in order along the run
+        offset = (nodes - runs[ra][0]) % N
+        order = np.argsort(offset)                     # in order along the run
+        along = nodes[order]
         m = along.size // 2
         mids.append(float(np.mean(dist[k, along[m - 1 + along.size % 2 : m + 1]])))
+        profiles.append(((offset[order] - offset[order][0]) * h, dist[k, along]))
         lens.append(float(nodes.size * h))
         partners = partner[k, nodes]
         run_list.append((int(nodes[0]), int(nodes[-1]), int(partners.min()),
@@ -470,7 +478,7 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
     stacked = int(np.sum(np.isfinite(dist).all(axis=0)))
     return SheetPairs(len(seps), np.asarray(seps), np.asarray(lens), run_list,
                       float(np.median(all_d)) if seps else float("nan"), stacked,
-                      float(separation), np.asarray(mins), np.asarray(mids))
+                      float(separation), np.asarray(mins), np.asarray(mids), profiles)
 
 
 # --------------------------------------------------------- self-intersection

@@ -133,6 +133,10 @@ def test_mid_separation_is_taken_halfway_along_the_pair():
         assert sheets.n_pairs == 1
         assert sheets.mid_separations[0] == pytest.approx(0.018, rel=0.02)
         assert sheets.min_separations[0] == pytest.approx(0.012, rel=0.02)
+        arc, d = sheets.profiles[0]
+        assert np.all(np.diff(arc) > 0) and arc[0] == 0
+        inside = (arc > 0.05) & (arc < 0.45)     # the spacing changes linearly
+        assert np.allclose(np.abs(np.diff(d[inside]) / np.diff(arc[inside])), 0.024, rtol=0.05)
 
 
 def test_closest_approach_and_self_intersection_monitor():
