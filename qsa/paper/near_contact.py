@@ -16,7 +16,17 @@ screening length ``l*`` shrinks. This module measures it on real equilibria:
   so the sheets keep ``nodes_per_l_star`` nodes per ``l*``, and at each requested
   ``l*`` the spacing at the middle of the paired sheets
   (:func:`qsa.flows.analysis.paired_sheets`) against ``d*``, its grid check on
-  ``Fourier(2N - 1)``, and the order fitted to the relative errors.
+  ``Fourier(2N - 1)``, and the order fitted to the relative errors;
+* :func:`relaxation_length` and :func:`decay_length` -- how fast the spacing
+  settles to ``d*`` along a pair, predicted and measured.
+
+Along a straight pair the deviation ``eta(s)`` of each sheet from ``d*/2`` off the
+midline obeys, linearized, ``eps d^4 eta / ds^4 + 2 k eta = 0`` (bending against the
+adhesion force, whose derivative in the spacing at ``d*`` is the stiffness ``k``,
+:func:`pair_stiffness`; tension and the width ``l*`` of the kernel neglected): the
+spacing relaxes from the ends of the pair in oscillations decaying on the length
+``sqrt(2) (eps / (2 k))^(1/4)``, which shrinks like ``l*^(1/4)``. In the middle of a
+long pair what is left of ``d* - spacing`` is exponentially small.
 """
 
 from __future__ import annotations
@@ -33,7 +43,8 @@ from qsa.flows.analysis import paired_sheets
 from qsa.paper.folded import folded_equilibrium
 
 __all__ = ["dumbbell", "paired_dumbbell", "SpacingPoint", "NearContactSweep",
-           "near_contact_sweep", "near_contact_study", "sheet_spacing"]
+           "near_contact_sweep", "near_contact_study", "sheet_spacing", "pair_stiffness",
+           "relaxation_length", "decay_length"]
 
 #: Table T1's parameters besides ``l*`` (Canham-Helfrich, perimeter, adhesion).
 T1 = {"eps": 0.08, "beta": 60.0, "A0": 40.0, "a": 1.0}
@@ -157,6 +168,68 @@ def sheet_spacing(curve, l_star, a=1.0, A0=1.0):
     return paired_sheets(x, y, AdhesionKernel(A0, l_star, a).pair_separation)
 
 
+def pair_stiffness(A0, l_star, a=1.0):
+    """Derivative in the spacing of the normal adhesion force between straight strands, at ``d*``.
+
+    The force on one strand from the other, ``D = d~ l*`` apart, has the normal component
+    ``4 sqrt(pi) (A0 / a^2) d~ exp(-d~^2) (d~^2 - a^2 - 1/2)`` (Conventions and errata,
+    section 6); at ``d~*^2 = a^2 + 1/2`` its derivative in ``D`` is
+    ``k = 8 sqrt(pi) A0 d~*^2 exp(-d~*^2) / (a^2 l*)``.
+    """
+    kern = AdhesionKernel(A0, l_star, a)
+    d2 = (kern.pair_separation / kern.l_star) ** 2
+    return float(8 * np.sqrt(np.pi) * kern.A0 * d2 * np.exp(-d2) / (kern.a ** 2 * kern.l_star))
+
+
+def relaxation_length(eps, A0, l_star, a=1.0):
+    """Decay length of the spacing's deviation from ``d*`` along a straight pair of sheets.
+
+    ``sqrt(2) (eps / (2 k))^(1/4)`` with ``k`` the :func:`pair_stiffness`: one over the
+    real part of the roots of ``lambda^4 = -2 k / eps`` (see the module docstring). The
+    deviation oscillates with wavelength ``2 pi`` times this length.
+    """
+    eps = real_number(eps, "eps", positive=True)
+    return float(np.sqrt(2.0) * (eps / (2 * pair_stiffness(A0, l_star, a))) ** 0.25)
+
+
+def decay_length(arc, spacing, target, floor=1e-8, ceiling=1e-2):
+    """Measured decay length of ``|spacing / target - 1|`` from the ends of a pair inward.
+
+    In each half of the pair (from an end to the middle) the local maxima of the
+    relative deviation between ``floor`` and ``ceiling`` are fitted by
+    ``log r = c - x / length`` in the distance ``x`` from that end; the result is the mean
+    over the halves with at least two maxima (``nan`` without).
+
+    Parameters
+    ----------
+    arc, spacing : array_like
+        A pair's profile (:attr:`qsa.flows.analysis.SheetPairs.profiles`).
+    target : float
+        ``d*``.
+    floor, ceiling : float
+        Range of relative deviations fitted: above the measurement's precision,
+        below the nonlinear turning regions.
+
+    Returns
+    -------
+    float
+    """
+    arc, spacing = np.asarray(arc, float), np.asarray(spacing, float)
+    r = np.abs(spacing / float(target) - 1)
+    mid = arc[-1] / 2
+    lengths = []
+    for half in (arc <= mid, arc > mid):
+        x = np.where(arc <= mid, arc, arc[-1] - arc)[half]
+        rr = r[half]
+        peak = np.flatnonzero((rr[1:-1] >= rr[:-2]) & (rr[1:-1] >= rr[2:])
+                              & (rr[1:-1] > floor) & (rr[1:-1] < ceiling)) + 1
+        if peak.size >= 2:
+            slope = np.polyfit(x[peak], np.log(rr[peak]), 1)[0]
+            if slope < 0:
+                lengths.append(-1.0 / slope)
+    return float(np.mean(lengths)) if lengths else float("nan")
+
+
 @dataclass(frozen=True)
 class SpacingPoint:
     """The spacing of the paired sheets of one polished equilibrium.
@@ -180,6 +253,10 @@ class SpacingPoint:
     pair_length : float
         Arc length of the pair.
     n_pairs : int
+    decay : float
+        :func:`decay_length` of the pair's profile (``nan`` when it has too few maxima).
+    predicted_decay : float
+        :func:`relaxation_length`.
     refined_spacing : float or None
         The mid spacing of the same equilibrium polished on ``Fourier(2N - 1)``.
     """
@@ -194,6 +271,8 @@ class SpacingPoint:
     minimum: float
     pair_length: float
     n_pairs: int
+    decay: float = float("nan")
+    predicted_decay: float = float("nan")
     refined_spacing: float | None = None
 
     @property
@@ -214,7 +293,9 @@ class SpacingPoint:
                 "spacing": self.spacing, "target": self.target,
                 "relative_error": self.relative_error, "median": self.median,
                 "minimum": self.minimum, "pair_length": self.pair_length,
-                "n_pairs": self.n_pairs, "refined_spacing": self.refined_spacing,
+                "n_pairs": self.n_pairs, "decay_length": self.decay,
+                "predicted_decay_length": self.predicted_decay,
+                "refined_spacing": self.refined_spacing,
                 "grid_change": self.grid_change}
 
 
@@ -253,12 +334,14 @@ class NearContactSweep:
     def table(self) -> str:
         """The points as a Markdown table."""
         rows = ["| l* | N | relative residual | mid spacing | d* | spacing/d* - 1 "
-                "| N -> 2N-1 change / d* |", "|---|---|---|---|---|---|---|"]
+                "| N -> 2N-1 change / d* | pair length | decay length | predicted |",
+                "|---|---|---|---|---|---|---|---|---|---|"]
         for p in self.points:
             change = "" if p.grid_change is None else f"{p.grid_change:.1e}"
             rows.append(f"| {p.l_star:g} | {p.N} | {p.relative_residual:.1e} "
                         f"| {p.spacing:.10f} | {p.target:.10f} | {p.relative_error:+.3e} "
-                        f"| {change} |")
+                        f"| {change} | {p.pair_length:.3f} | {p.decay:.4f} "
+                        f"| {p.predicted_decay:.4f} |")
         return "\n".join(rows)
 
 
@@ -282,13 +365,16 @@ def _point(fe, l_star, params, refined=None):
         i = int(np.argmax(sp.lengths))
         mid, med, lo, ln = (sp.mid_separations[i], sp.separations[i], sp.min_separations[i],
                             sp.lengths[i])
+        decay = decay_length(*sp.profiles[i], sp.target)
     else:
-        mid = med = lo = ln = float("nan")
+        mid = med = lo = ln = decay = float("nan")
     return SpacingPoint(l_star=float(l_star), N=int(fe.N),
                         relative_residual=fe.relative_residual,
                         success=bool(fe.polished.success), spacing=float(mid),
                         target=float(sp.target), median=float(med), minimum=float(lo),
-                        pair_length=float(ln), n_pairs=int(sp.n_pairs),
+                        pair_length=float(ln), n_pairs=int(sp.n_pairs), decay=decay,
+                        predicted_decay=relaxation_length(params["eps"], params["A0"], l_star,
+                                                          params["a"]),
                         refined_spacing=refined)
 
 

@@ -4,11 +4,15 @@ import numpy as np
 import pytest
 
 from qsa.energies import AdhesionKernel
+from qsa.energies.adhesion import adhesion_fields
 from qsa.paper.near_contact import (
+    decay_length,
     dumbbell,
     near_contact_study,
     near_contact_sweep,
+    pair_stiffness,
     paired_dumbbell,
+    relaxation_length,
     sheet_spacing,
 )
 
@@ -33,6 +37,41 @@ def test_dumbbell_is_a_closed_ccw_curve_with_parallel_sheets():
         dumbbell(neck, d, R, r, 5)
 
 
+@pytest.mark.parametrize("a", [0.8, 1.0, 1.5])
+def test_pair_stiffness_is_the_derivative_of_the_force_between_strands(a):
+    # two straight strands y = 0 and y = D: central differences in D of the normal force
+    # on the lower one (outward normal -e_y) at D = d*, where the force vanishes
+    A0, l_star = 3.0, 0.05
+    k = AdhesionKernel(A0=A0, l_star=l_star, a=a)
+    h = l_star / 8
+    s = h * np.arange(-320, 321)
+    mid = s.size // 2
+
+    def normal_force(D):
+        x = np.concatenate([s, s])
+        y = np.concatenate([np.zeros_like(s), np.full_like(s, D)])
+        return -adhesion_fields(k, x, y, h)[1][mid, 1]
+
+    d, dD = k.pair_separation, 1e-4 * l_star
+    assert abs(normal_force(d)) < 1e-10 * A0 / l_star
+    fd = (normal_force(d + dD) - normal_force(d - dD)) / (2 * dD)
+    assert pair_stiffness(A0, l_star, a) == pytest.approx(fd, rel=1e-6)
+    # the relaxation length scales like (eps l* / A0)^(1/4)
+    r = relaxation_length(0.08, A0, l_star, a)
+    assert relaxation_length(0.08 * 16, A0, l_star, a) == pytest.approx(2 * r)
+    assert relaxation_length(0.08, A0, l_star / 16, a) == pytest.approx(r / 2)
+
+
+def test_decay_length_of_decaying_oscillations_from_both_ends():
+    lam, length = 0.07, 2.0
+    arc = np.linspace(0, length, 2001)
+    x = np.minimum(arc, length - arc)
+    d_star = 0.03
+    spacing = d_star * (1 + 0.05 * np.exp(-x / lam) * np.cos(x / lam + 0.4))
+    assert decay_length(arc, spacing, d_star) == pytest.approx(lam, rel=1e-3)
+    assert np.isnan(decay_length(arc, np.full_like(arc, d_star), d_star))
+
+
 def test_spacing_of_a_polished_dumbbell_tends_to_d_star():
     # a dumbbell polished at l* = 0.1 (Table T1's eps, beta, A0, a) and followed to
     # l* = 0.2: the sheets sit at l* sqrt(a^2 + 1/2) in the middle of the pair, the
@@ -53,6 +92,8 @@ def test_spacing_of_a_polished_dumbbell_tends_to_d_star():
     assert sw.order > 1
     # where the sheets turn apart into the lobes the spacing dips below d*
     assert -0.1 < p01.minimum / p01.target - 1 < -0.005
+    # and relaxes to d* along the pair on the length of the linearized bending-adhesion balance
+    assert p01.decay == pytest.approx(p01.predicted_decay, rel=0.1)
     # the measurement itself: the polished curve's pair, d* from the kernel
     sp = sheet_spacing(sw.curves[1], 0.1)
     assert sp.target == AdhesionKernel(40.0, 0.1, 1.0).pair_separation
