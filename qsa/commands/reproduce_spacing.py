@@ -36,7 +36,10 @@ def add_arguments(p):
     p.add_argument("--no-grid-check", action="store_true",
                    help="skip the second polish on Fourier(2N - 1)")
     p.add_argument("--json", action="store_true", help="JSON summary on stdout")
-    p.add_argument("--out", default=None, metavar="DIR", help="folder for spacing.json")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="folder for spacing.json and the figure spacing.png")
+    p.add_argument("--plot", metavar="FILE",
+                   help="write the figure (the equilibria, the spacing along the pair) to FILE")
 
 
 def run(args):
@@ -54,6 +57,14 @@ def run(args):
     summary = sweep.summary()
     if args.out:
         os.makedirs(args.out, exist_ok=True)
+    figures = [f for f in (args.plot, args.out and os.path.join(args.out, "spacing.png")) if f]
+    if figures:
+        from qsa.plotting import save
+        from qsa.plotting.simulations import spacing_figure
+
+        fig = spacing_figure(sweep)
+        summary["figures"] = [save(fig, f) for f in figures]
+    if args.out:
         with open(os.path.join(args.out, "spacing.json"), "w") as fh:
             json.dump(summary, fh, indent=2)
     if args.json:
