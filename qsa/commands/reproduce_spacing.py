@@ -75,5 +75,9 @@ def run(args):
               f"A0 = {p['A0']:g}, a = {p['a']:g}, perimeter target {p['L_star']:.4f}); "
               "spacing in the middle of the pair against d* = l* sqrt(a^2 + 1/2)")
         print(sweep.table())
-        print(f"fitted order of |spacing/d* - 1| in l*: {sweep.order:.2f}; {sweep.message}")
+        print(f"fitted order of |spacing/d* - 1| in l*: {sweep.order:.2f} (the middle of a pair "
+              "sees the tails of its ends, not a power law)")
+        print("decay length along the pair / sqrt(2) (eps / 2k)^(1/4) - 1: "
+              + ", ".join(f"{pt.decay_error:+.2g}" for pt in sweep.points)
+              + f" (fitted order {sweep.decay_order:.2f}); {sweep.message}")
     return 0 if sweep.success else 1

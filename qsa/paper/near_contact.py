@@ -281,6 +281,11 @@ class SpacingPoint:
         return float(self.spacing / self.target - 1)
 
     @property
+    def decay_error(self) -> float:
+        """``decay / predicted_decay - 1``: how well the linearized balance predicts the tail."""
+        return float(self.decay / self.predicted_decay - 1)
+
+    @property
     def grid_change(self) -> float | None:
         """``|refined_spacing - spacing| / d*`` (``None`` without the refined grid)."""
         if self.refined_spacing is None:
@@ -295,6 +300,7 @@ class SpacingPoint:
                 "minimum": self.minimum, "pair_length": self.pair_length,
                 "n_pairs": self.n_pairs, "decay_length": self.decay,
                 "predicted_decay_length": self.predicted_decay,
+                "decay_error": self.decay_error,
                 "refined_spacing": self.refined_spacing,
                 "grid_change": self.grid_change}
 
@@ -311,7 +317,8 @@ class NearContactSweep:
         ``eps, beta, A0, a, L_star``.
     order : float
         Slope of ``log|relative_error|`` against ``log l*`` (least squares over the
-        points; ``nan`` with fewer than two).
+        points; ``nan`` with fewer than two). The errors in the middle of a pair are
+        the tails of its ends, so this is a summary, not the order of a power law.
     curves : tuple of Curve
         The polished equilibria (not in the summary).
     success : bool
@@ -326,9 +333,17 @@ class NearContactSweep:
     success: bool = True
     message: str = ""
 
+    @property
+    def decay_order(self) -> float:
+        """Slope of ``log|decay_error|`` against ``log l*`` (least squares; ``nan`` with
+        fewer than two finite values)."""
+        return _fitted_order([p.l_star for p in self.points],
+                             [p.decay_error for p in self.points])
+
     def summary(self) -> dict:
         """JSON-able summary."""
-        return {"params": dict(self.params), "order": self.order, "success": self.success,
+        return {"params": dict(self.params), "order": self.order,
+                "decay_order": self.decay_order, "success": self.success,
                 "message": self.message, "points": [p.to_dict() for p in self.points]}
 
     def table(self) -> str:
@@ -343,6 +358,15 @@ class NearContactSweep:
                         f"| {change} | {p.pair_length:.3f} | {p.decay:.4f} "
                         f"| {p.predicted_decay:.4f} |")
         return "\n".join(rows)
+
+
+def _fitted_order(l_stars, errors):
+    """Least-squares slope of ``log|error|`` against ``log l*`` (``nan`` below two points)."""
+    ls, err = np.asarray(l_stars, float), np.abs(np.asarray(errors, float))
+    good = np.isfinite(err) & (err > 0)
+    if good.sum() < 2:
+        return float("nan")
+    return float(np.polyfit(np.log(ls[good]), np.log(err[good]), 1)[0])
 
 
 def _grid_size(length, l_star, nodes_per_l_star, N_min):
@@ -454,11 +478,7 @@ def near_contact_sweep(start, l_stars, *, nodes_per_l_star=10.0, max_ratio=2 ** 
         if progress is not None:
             progress(f"l* = {target:g}: N = {pt.N}, relative residual "
                      f"{pt.relative_residual:.1e}, spacing/d* - 1 = {pt.relative_error:+.3e}")
-    err = np.array([abs(pt.relative_error) for pt in points])
-    ls = np.array([pt.l_star for pt in points])
-    good = np.isfinite(err) & (err > 0)
-    order = (float(np.polyfit(np.log(ls[good]), np.log(err[good]), 1)[0])
-             if good.sum() >= 2 else float("nan"))
+    order = _fitted_order([pt.l_star for pt in points], [pt.relative_error for pt in points])
     success = (len(points) == len(l_stars) and all(pt.success and pt.n_pairs for pt in points))
     return NearContactSweep(points=tuple(points), params=params, order=order,
                             curves=tuple(curves), success=success, message=message)

@@ -98,7 +98,7 @@ def test_spacing_of_a_polished_dumbbell_tends_to_d_star():
     sp = sheet_spacing(sw.curves[1], 0.1)
     assert sp.target == AdhesionKernel(40.0, 0.1, 1.0).pair_separation
     assert sp.mid_separations[0] == p01.spacing
-    assert {"order", "points", "params"} <= set(sw.summary())
+    assert {"order", "decay_order", "points", "params"} <= set(sw.summary())
     assert sw.table().count("\n") == 3
 
 
@@ -125,3 +125,8 @@ def test_near_contact_sweep_from_l_star_0_2_to_0_025():
         assert p.N >= 10 * 7.0 / p.l_star
     assert err[0] < 1e-4 and np.all(err[1:] < err[0] / 10)
     assert np.all(err[1:] < 1e-6)
+    # the tails relax on the predicted length, better and better as l* shrinks
+    # (measured 0.36, 0.042, 0.012, 0.0015)
+    decay = np.array([abs(p.decay_error) for p in sw.points])
+    assert np.all(np.diff(decay) < 0) and decay[1] < 0.06 and decay[-1] < 0.005
+    assert sw.decay_order > 1.5
