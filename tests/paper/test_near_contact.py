@@ -102,13 +102,32 @@ def test_spacing_of_a_polished_dumbbell_tends_to_d_star():
     assert sw.table().count("\n") == 3
 
 
-def test_sweep_refuses_bad_input():
-    class Unpolished:
-        class polished:
-            success = False
+class Unpolished:
+    """A starting state whose polish failed."""
 
+    params = {"eps": 0.08, "beta": 60.0, "A0": 40.0, "a": 1.0, "L_star": 7.0, "l_star": 0.1}
+
+    class polished:
+        success = False
+        message = "maximum number of Newton iterations reached"
+
+
+def test_sweep_refuses_an_unpolished_start_and_the_study_reports_it(monkeypatch):
     with pytest.raises(ValueError, match="start"):
         near_contact_sweep(Unpolished(), [0.1])
+    class Polished(Unpolished):
+        class polished:
+            success = True
+
+    with pytest.raises(ValueError, match="l_stars"):
+        near_contact_sweep(Polished(), [])
+    with pytest.raises(ValueError, match="max_ratio"):
+        near_contact_sweep(Polished(), [0.1], max_ratio=1.0)
+    import qsa.paper.near_contact as nc
+
+    monkeypatch.setattr(nc, "paired_dumbbell", lambda *a, **k: Unpolished())
+    sw = near_contact_study([0.1])
+    assert not sw.success and sw.points == () and "did not polish" in sw.message
 
 
 @pytest.mark.slow
