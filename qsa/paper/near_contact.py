@@ -340,6 +340,17 @@ class NearContactSweep:
         return _fitted_order([p.l_star for p in self.points],
                              [p.decay_error for p in self.points])
 
+    def profiles(self) -> list:
+        """``(arc, spacing)`` along the longest pair of each curve (``None`` without pairs).
+
+        See :attr:`qsa.flows.analysis.SheetPairs.profiles`.
+        """
+        out = []
+        for p, c in zip(self.points, self.curves, strict=True):
+            sp = sheet_spacing(c, p.l_star, self.params["a"], self.params["A0"])
+            out.append(sp.profiles[int(np.argmax(sp.lengths))] if sp.n_pairs else None)
+        return out
+
     def summary(self) -> dict:
         """JSON-able summary."""
         return {"params": dict(self.params), "order": self.order,

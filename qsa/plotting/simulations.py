@@ -311,11 +311,10 @@ def spacing_figure(sweep, size=(4.6, 3.4)):
     ----------
     sweep : qsa.paper.near_contact.NearContactSweep
     """
-    from qsa.flows.analysis import paired_sheets
-
     fig, (left, right) = new_figure(ncols=2, size=size)
     offset = 0.0
-    for k, (p, c) in enumerate(zip(sweep.points, sweep.curves, strict=True)):
+    profiles = sweep.profiles()
+    for k, (p, c, prof) in enumerate(zip(sweep.points, sweep.curves, profiles, strict=True)):
         color = f"C{k}"
         x, y = c.positions()
         xc, yc = x - x.mean(), y - y.mean()
@@ -325,10 +324,9 @@ def spacing_figure(sweep, size=(4.6, 3.4)):
         left.text(u.max(), -offset - v.max(), rf" $\ell_*$ = {p.l_star:g}", fontsize=7,
                   color=color, va="center")
         offset += np.ptp(v) + 0.1
-        sp = paired_sheets(x, y, p.target)
-        if not sp.n_pairs:
+        if prof is None:
             continue
-        arc, d = sp.profiles[int(np.argmax(sp.lengths))]
+        arc, d = prof
         dist = np.minimum(arc, arc[-1] - arc)
         r = np.abs(d / p.target - 1)
         order = np.argsort(dist)

@@ -98,6 +98,9 @@ def test_spacing_of_a_polished_dumbbell_tends_to_d_star():
     sp = sheet_spacing(sw.curves[1], 0.1)
     assert sp.target == AdhesionKernel(40.0, 0.1, 1.0).pair_separation
     assert sp.mid_separations[0] == p01.spacing
+    arc, d = sw.profiles()[1]
+    assert np.array_equal(d, sp.profiles[0][1])
+    assert arc[-1] == pytest.approx(p01.pair_length, rel=0.01)
     assert {"order", "decay_order", "points", "params"} <= set(sw.summary())
     assert sw.table().count("\n") == 3
 
