@@ -11,8 +11,8 @@ from __future__ import annotations
 import importlib
 
 #: Reproductions, in the order ``qsa reproduce --help`` lists them.
-REPRODUCTIONS = ["convergence", "timesteps", "facet", "snowflake", "folding", "folded", "fronts",
-                 "coarsening"]
+REPRODUCTIONS = ["convergence", "timesteps", "facet", "snowflake", "folding", "folded", "spacing",
+                 "fronts", "coarsening"]
 
 
 def _modules():

@@ -311,6 +311,17 @@ class SheetPairs:
         where the paper's near-contact analysis (s:NSI) places the optimal
         separation. On long flat sheets it equals the median; on short curved
         contacts the median is biased up by the diverging ends.
+    mid_separations : ndarray, shape (n_pairs,)
+        Separation at the middle of each pair (the node halfway along the paired
+        nodes of its first sheet; the mean of the two middle nodes for an even
+        count): the spacing of the paired sheets away from the regions where
+        they turn apart, which is where the near-contact analysis applies. At the
+        ends of a pair the sheets overshoot and diverge, so the minimum and the
+        median mix in the turning regions.
+    profiles : list of tuple
+        ``(arc, separation)`` of each pair: the separation at the paired nodes of its
+        first sheet, in order along the curve, against their arc length from the
+        first of them (mean chord times the number of nodes between).
     """
 
     n_pairs: int
@@ -321,6 +332,8 @@ class SheetPairs:
     n_stacked: int = 0
     target: float = float("nan")
     min_separations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    mid_separations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    profiles: list = field(default_factory=list, repr=False)
 
     @property
     def ratio(self) -> float:
@@ -341,6 +354,7 @@ class SheetPairs:
                           if self.n_pairs and self.target > 0 else None),
             "max_min_ratio": (float(np.max(self.min_separations) / self.target)
                               if self.n_pairs and self.target > 0 else None),
+            "mid_separations": [float(v) for v in self.mid_separations],
         }
 
 
@@ -440,7 +454,7 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
         for node in nodes:
             key = (run_of[node], run_of[partner[k, node]], k)
             groups.setdefault(key, []).append(node)
-    seps, mins, lens, run_list, seen = [], [], [], [], set()
+    seps, mins, mids, lens, run_list, seen, profiles = [], [], [], [], [], set(), []
     for (ra, rb, k), nodes in sorted(groups.items()):
         if ra < 0 or rb < 0 or (rb, ra) in seen:
             continue
@@ -450,6 +464,12 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
         seen.add((ra, rb))
         seps.append(float(np.median(dist[k, nodes])))
         mins.append(float(np.min(dist[k, nodes])))
+        offset = (nodes - runs[ra][0]) % N
+        order = np.argsort(offset)                     # in order along the run
+        along = nodes[order]
+        m = along.size // 2
+        mids.append(float(np.mean(dist[k, along[m - 1 + along.size % 2 : m + 1]])))
+        profiles.append(((offset[order] - offset[order][0]) * h, dist[k, along]))
         lens.append(float(nodes.size * h))
         partners = partner[k, nodes]
         run_list.append((int(nodes[0]), int(nodes[-1]), int(partners.min()),
@@ -458,7 +478,7 @@ def paired_sheets(x, y, separation, *, reach=2.0, min_length=None, cos_max=-0.8)
     stacked = int(np.sum(np.isfinite(dist).all(axis=0)))
     return SheetPairs(len(seps), np.asarray(seps), np.asarray(lens), run_list,
                       float(np.median(all_d)) if seps else float("nan"), stacked,
-                      float(separation), np.asarray(mins))
+                      float(separation), np.asarray(mins), np.asarray(mids), profiles)
 
 
 # --------------------------------------------------------- self-intersection

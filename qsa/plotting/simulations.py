@@ -23,6 +23,7 @@ __all__ = [
     "facet_figures",
     "cha_figures",
     "folding_figure",
+    "spacing_figure",
 ]
 
 
@@ -295,4 +296,50 @@ def folded_modes_figure(results, n_modes=2, size=3.2):
             ax.add_collection(lc)
             ax.autoscale_view()
             ax.set_title(rf"{r.name}: $\lambda$ = {r.spectrum.eigenvalues[i]:.4g}", fontsize=8)
+    return fig
+
+
+def spacing_figure(sweep, size=(4.6, 3.4)):
+    """The paired sheets of a near-contact sweep and their spacing along the pair.
+
+    Left: each polished equilibrium (stacked, labelled by ``l*``). Right:
+    ``|spacing / d* - 1|`` along the longest pair against the distance from its nearer
+    end, with the decay ``exp(-x / length)`` of the predicted relaxation length
+    (dashed, through the largest maximum below ``1e-2``).
+
+    Parameters
+    ----------
+    sweep : qsa.paper.near_contact.NearContactSweep
+    """
+    fig, (left, right) = new_figure(ncols=2, size=size)
+    offset = 0.0
+    profiles = sweep.profiles()
+    for k, (p, c, prof) in enumerate(zip(sweep.points, sweep.curves, profiles, strict=True)):
+        color = f"C{k}"
+        x, y = c.positions()
+        xc, yc = x - x.mean(), y - y.mean()
+        _, _, vt = np.linalg.svd(np.column_stack([xc, yc]), full_matrices=False)
+        u, v = (np.column_stack([xc, yc]) @ vt.T).T
+        left.plot(_closed(u), _closed(v) - v.max() - offset, color=color, lw=1)
+        left.text(u.max(), -offset - v.max(), rf" $\ell_*$ = {p.l_star:g}", fontsize=7,
+                  color=color, va="center")
+        offset += np.ptp(v) + 0.1
+        if prof is None:
+            continue
+        arc, d = prof
+        dist = np.minimum(arc, arc[-1] - arc)
+        r = np.abs(d / p.target - 1)
+        order = np.argsort(dist)
+        right.semilogy(dist[order], r[order], ".", ms=1.5, color=color)
+        below = r < 1e-2
+        if below.any() and np.isfinite(p.predicted_decay):
+            i = np.flatnonzero(below)[np.argmax(r[below])]
+            xs = np.linspace(dist[i], dist.max(), 20)
+            right.semilogy(xs, r[i] * np.exp(-(xs - dist[i]) / p.predicted_decay), "--",
+                           color=color, lw=0.8)
+    left.set_aspect("equal")
+    left.axis("off")
+    right.set_xlabel("distance from the end of the pair")
+    right.set_ylabel(r"$|d / d^* - 1|$")
+    right.set_ylim(1e-11, 1)
     return fig

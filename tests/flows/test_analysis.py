@@ -114,12 +114,29 @@ def test_paired_sheets_of_a_stadium():
     assert sheets.n_pairs == 1
     assert sheets.separation == pytest.approx(gap, rel=1e-6)
     assert sheets.min_separations[0] == pytest.approx(gap, rel=1e-6)
+    assert sheets.mid_separations[0] == pytest.approx(gap, rel=1e-6)
     assert sheets.lengths[0] == pytest.approx(0.5, rel=0.1)
     assert sheets.n_stacked == 0
     assert sheets.ratio == pytest.approx(gap / 0.012247)
     # far apart: no pairs
     x, y = stadium(0.5, 0.2, 0.004)
     assert paired_sheets(x, y, 0.012247).n_pairs == 0
+
+
+def test_mid_separation_is_taken_halfway_along_the_pair():
+    # sheets opening linearly from 0.012 to 0.024 along x in [0, 0.5]: the middle of
+    # the pair (x = 0.25, spacing 0.018) whatever node the curve starts at
+    x, y = stadium(0.5, 0.012, 0.002)
+    y = y * (1 + np.clip(x, 0, 0.5) / 0.5)
+    for shift in (0, 100, 300):
+        sheets = paired_sheets(np.roll(x, shift), np.roll(y, shift), 0.012)
+        assert sheets.n_pairs == 1
+        assert sheets.mid_separations[0] == pytest.approx(0.018, rel=0.02)
+        assert sheets.min_separations[0] == pytest.approx(0.012, rel=0.02)
+        arc, d = sheets.profiles[0]
+        assert np.all(np.diff(arc) > 0) and arc[0] == 0
+        inside = (arc > 0.05) & (arc < 0.45)     # the spacing changes linearly
+        assert np.allclose(np.abs(np.diff(d[inside]) / np.diff(arc[inside])), 0.024, rtol=0.05)
 
 
 def test_closest_approach_and_self_intersection_monitor():
