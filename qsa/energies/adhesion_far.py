@@ -128,13 +128,13 @@ class HierarchicalPairHessian:
 
     @property
     def near_nnz(self) -> int:
-        """Stored near entries of one ``G`` (both orientations)."""
+        """Near pairs of one ``G`` (each unordered pair once)."""
         return int(self.G["w"].near.nnz)
 
     @property
     def far_factor_entries(self) -> int:
         """Stored far-factor entries over the six functions."""
-        return int(sum(g.left.nnz + g.right.nnz for g in self.G.values()))
+        return int(sum(g.left.nnz for g in self.G.values()))
 
     @property
     def error_estimates(self) -> dict:

@@ -3,7 +3,7 @@
 A matrix ``G`` with entries ``G[r, c] = f(r, c)`` for the pairs of points closer than a
 cutoff (zero elsewhere and on the diagonal), ``f`` smooth away from ``r = c``, is held as ::
 
-    G ~ Near + Lf Rf,
+    G ~ Near + L S L^T,
 
 * a **cluster tree** (:func:`cluster_tree`): the points' bounding box bisected along its
   longer side at the median point, down to leaves of at most ``leaf_size`` points;
@@ -16,16 +16,17 @@ cutoff (zero elsewhere and on the diagonal), ``f`` smooth away from ``r = c``, i
 * per far block a **low-rank factorization** ``U V^T`` by adaptive cross approximation
   (:func:`aca`): partial pivoting on rows and columns of the block evaluated on demand
   (``k (m + n)`` entries for rank ``k``, never the ``m n`` of the block), stopped when
-  the last cross is below ``tol`` times the running Frobenius norm. The stopping rule is
-  a heuristic, so each factorization is then checked a posteriori: the remainder
-  ``R = S - U V^T`` at ``s`` entries drawn uniformly at random gives the unbiased
-  estimate ``||R||_F^2 ~ (m n / s) sum R_ij^2``; a block whose estimate exceeds
-  ``tol ||S||_F`` gets more crosses from the row of the worst sampled entry (twice at
+  the last cross is below ``tol`` times the running Frobenius norm or below the block's
+  share of ``tol ||G_near||_F`` (by its fraction of the pairs). The stopping rule is a
+  heuristic, so each factorization is then checked a posteriori: the remainder
+  ``R = B - U V^T`` of the block ``B`` at ``s`` entries drawn uniformly at random gives
+  the unbiased estimate ``||R||_F^2 ~ (m n / s) sum R_ij^2``; a block whose estimate
+  exceeds its bound gets more crosses from the row of the worst sampled entry (twice at
   most, each checked on fresh samples), then is evaluated densely and truncated by its
-  SVD (exact Frobenius remainder). So ``||G_far - Lf Rf||_F <~ tol ||G_far||_F`` block
-  by block. Sampling sees errors spread over a block (the smooth case), not a few
-  isolated entries: the function must be smooth on admissible blocks and negligible
-  (below ``tol`` relative) at the cutoff, where the far blocks' entries are masked.
+  SVD (exact Frobenius remainder). So ``||G_far - L S L^T||_F <~ tol ||G||_F``.
+  Sampling sees errors spread over a block (the smooth case), not a few isolated
+  entries: the function must be smooth on admissible blocks and negligible (below
+  ``tol`` relative) at the cutoff, where the far blocks' entries are masked.
 
 Adaptive cross approximation rather than interpolation: the admissible blocks of a
 Gaussian-type kernel have numerical ranks of 10-35 at 1e-12, while tensor Chebyshev
@@ -33,10 +34,12 @@ interpolation in two dimensions needs ``p^2`` terms (100-200 at that accuracy), 
 cross approximation adapts the rank per block and to the matrix actually assembled
 (including the cutoff mask and any factors of the pair function).
 
-The far factors of all blocks are stacked into two sparse matrices (``Lf``: N x R,
-``Rf``: R x N, ``R`` twice the sum of the ranks for symmetric functions), so a product
-with a vector or a block of vectors is three sparse products without a Python loop.
-Memory: the near pairs plus ``sum_blocks k (m + n)`` factor entries.
+The far factors ``U``, ``V`` of all blocks are stacked, each once, as the columns of one
+sparse ``N x R`` matrix ``L`` (``R`` twice the sum of the ranks), and ``S`` pairs each
+block's ``U`` columns with its ``V`` columns (with the function's symmetry sign for the
+mirror block ``(t, s)``), so a product with a vector or a block of vectors is three
+sparse products and a signed permutation, without a Python loop. Memory: the near
+pairs plus ``sum_blocks k (m + n)`` factor entries (value and column index each).
 """
 
 from __future__ import annotations
@@ -269,7 +272,7 @@ def block_partition(tree: ClusterTree, eta=1.0, cutoff=np.inf) -> BlockPartition
                           np.asarray(far, dtype=np.intp).reshape(-1, 2))
 
 
-def aca(row, col, m, n, tol, max_rank=None, *, start=None):
+def aca(row, col, m, n, tol, max_rank=None, *, atol=0.0, start=None):
     """Adaptive cross approximation with partial pivoting of an ``m x n`` block.
 
     Parameters
@@ -281,6 +284,8 @@ def aca(row, col, m, n, tol, max_rank=None, *, start=None):
         Stop when the last cross ``|u_k| |v_k| <= tol ||U V^T||_F``.
     max_rank : int, optional
         Default ``min(m, n)``.
+    atol : float
+        Also stop, without keeping it, at a cross ``|u_k| |v_k| <= atol``.
     start : tuple (U, V, i), optional
         Continue an earlier approximation ``U V^T`` from pivot row ``i``.
 
@@ -321,6 +326,8 @@ def aca(row, col, m, n, tol, max_rank=None, *, start=None):
             continue
         v = r / r[j]
         u = col(j) - U[:, :k] @ V[j, :k]
+        if np.sqrt((u @ u) * (v @ v)) <= atol:
+            break
         norm2 += (u @ u) * (v @ v) + 2.0 * ((U[:, :k].T @ u) @ (V[:, :k].T @ v))
         U[:, k], V[:, k] = u, v
         k += 1
@@ -333,17 +340,17 @@ def aca(row, col, m, n, tol, max_rank=None, *, start=None):
     return U[:, :k], V[:, :k]
 
 
-def _truncated_svd(S, tol):
-    """``U V^T`` with ``||S - U V^T||_F <= tol ||S||_F`` (the optimal rank)."""
+def _truncated_svd(S, tol, atol=0.0):
+    """``U V^T`` with ``||S - U V^T||_F <= max(tol ||S||_F, atol)`` (the optimal rank)."""
     W, sig, Zt = np.linalg.svd(S, full_matrices=False)
     tail = np.sqrt(np.cumsum((sig**2)[::-1]))[::-1]  # tail[k] = ||sig[k:]||
-    k = int(np.sum(tail > tol * (tail[0] if tail.size else 0.0)))
+    k = int(np.sum(tail > max(tol * (tail[0] if tail.size else 0.0), atol)))
     return W[:, :k] * sig[:k], Zt[:k].T
 
 
 @dataclass(frozen=True, eq=False)
 class HierarchicalMatrix:
-    """``G ~ Near + Lf Rf``: a pair function's matrix in near-field + low-rank form.
+    """``G ~ Near + L S L^T``: a pair function's matrix in near-field + low-rank form.
 
     Built by :func:`hierarchical_matrix`; behaves as an ``N x N`` operator (``@`` with
     vectors and blocks of vectors, ``shape``).
@@ -351,24 +358,30 @@ class HierarchicalMatrix:
     Parameters
     ----------
     near : scipy.sparse.csr_matrix, shape (N, N)
-        The exact entries at the near pairs (both orientations).
+        The exact entries at the near pairs, each unordered pair once; the near field
+        is ``near + symmetry near^T``.
+    symmetry : {1, -1}
     left : scipy.sparse.csr_matrix, shape (N, R)
-    right : scipy.sparse.csr_matrix, shape (R, N)
-        The far field ``left @ right``.
+        The far factors ``L``, each block's ``U`` then ``V`` columns.
+    pairing : ndarray of intp, shape (R,)
+    signs : ndarray, shape (R,)
+        ``S``: ``(S z)[q] = signs[q] z[pairing[q]]``; the far field is ``L S L^T``.
     ranks : ndarray of intp, shape (n_far,)
         The rank of each far block.
     norm_estimate : float
         ``||G||_F`` (near part exact, far part estimated).
     error_estimate : float
-        Estimate of ``||G - (Near + Lf Rf)||_F`` (root sum of squares of the blocks'
+        Estimate of ``||G - (Near + L S L^T)||_F`` (root sum of squares of the blocks'
         sampled remainders; SVD-truncated blocks contribute their exact remainder).
     n_fallback : int
         Blocks that failed the a posteriori check and were SVD-truncated.
     """
 
     near: sp.csr_matrix
+    symmetry: int
     left: sp.csr_matrix
-    right: sp.csr_matrix
+    pairing: np.ndarray
+    signs: np.ndarray
     ranks: np.ndarray
     norm_estimate: float
     error_estimate: float
@@ -385,17 +398,23 @@ class HierarchicalMatrix:
 
     @property
     def nbytes(self) -> int:
-        """Bytes of the stored arrays (values and indices of all three sparse matrices)."""
+        """Bytes of the stored arrays (near entries, far factors, pairing)."""
         return int(sum(a.data.nbytes + a.indices.nbytes + a.indptr.nbytes
-                       for a in (self.near, self.left, self.right)))
+                       for a in (self.near, self.left))
+                   + self.pairing.nbytes + self.signs.nbytes)
 
     def __matmul__(self, v):
         v = np.asarray(v, dtype=float)
-        return self.near @ v + self.left @ (self.right @ v)
+        z = self.left.T @ v
+        sg = self.signs if z.ndim == 1 else self.signs[:, None]
+        return (self.near @ v + self.symmetry * (self.near.T @ v)
+                + self.left @ (sg * z[self.pairing]))
 
     def toarray(self) -> np.ndarray:
         """Dense ``N x N`` (tests and small cases only)."""
-        return self.near.toarray() + (self.left @ self.right).toarray()
+        L = self.left.toarray()
+        Nr = self.near.toarray()
+        return Nr + self.symmetry * Nr.T + (L * self.signs) @ L[:, self.pairing].T
 
 
 def _stack(blocks, N, R, tree):
@@ -429,7 +448,11 @@ def hierarchical_matrix(partition: BlockPartition, entries, *, symmetry=1, tol=1
         ``f(c, r) = symmetry * f(r, c)``: each unordered pair and far block is computed
         once and used in both orientations.
     tol : float
-        Relative Frobenius tolerance per far block (``0 < tol < 1``).
+        Relative Frobenius tolerance (``0 < tol < 1``): each far block ``B`` of ``m n``
+        of the ``P`` point pairs (near and far) is approximated to
+        ``max(tol ||B||_F, tol ||G_near||_F sqrt(m n / 2P))``, so that the whole far
+        field is within ``tol ||G||_F`` while blocks far below the matrix's size get
+        low ranks (or none).
     n_samples : int, optional
         Entries sampled per block for the a posteriori check; default
         ``min(m n, 64 + 2 (m + n))``.
@@ -466,18 +489,21 @@ def hierarchical_matrix(partition: BlockPartition, entries, *, symmetry=1, tol=1
 
     r, c = partition.near_rows, partition.near_cols
     vn = f(r, c) if r.size else np.zeros(0)
-    near = sp.csr_matrix((np.concatenate([vn, symmetry * vn]),
-                          (np.concatenate([r, c]), np.concatenate([c, r]))), shape=(N, N))
+    near = sp.csr_matrix((vn, (r, c)), shape=(N, N))
     norm2 = 2.0 * float(vn @ vn)
+    # absolute share of each block (m n of the P point pairs) in tol ||G_near||_F
+    n_pairs = r.size + partition.n_far_entries
+    share = tol * np.sqrt(norm2 / (2.0 * max(n_pairs, 1)))
     err2 = 0.0
     rng = np.random.default_rng(seed)
     ranks, n_fallback = [], 0
-    lefts, rights = [], []
+    lefts, pairing, signs = [], [], []
     for s, t in partition.far:
         I, J = tree.indices(s), tree.indices(t)
         m, n = I.size, J.size
         row, col = (lambda i, I=I, J=J: f(I[i], J)), (lambda j, I=I, J=J: f(I, J[j]))
-        U, V = aca(row, col, m, n, tol)
+        atol = share * np.sqrt(m * n)
+        U, V = aca(row, col, m, n, tol, atol=atol)
         ns = min(m * n, 64 + 2 * (m + n)) if n_samples is None else min(m * n, int(n_samples))
         for attempt in range(3):
             # a posteriori: the remainder at fresh random entries
@@ -488,13 +514,14 @@ def hierarchical_matrix(partition: BlockPartition, entries, *, symmetry=1, tol=1
             scale = m * n / ns
             e2 = scale * float(rem @ rem)
             s2 = max(float(np.sum((U.T @ U) * (V.T @ V))), scale * float(exact @ exact))
-            if e2 <= (tol**2) * s2:
+            if e2 <= max((tol**2) * s2, atol**2):
                 break
             if attempt < 2:  # continue the crosses from the worst sampled row
-                U, V = aca(row, col, m, n, tol, start=(U, V, int(a[np.argmax(np.abs(rem))])))
+                U, V = aca(row, col, m, n, tol, atol=atol,
+                           start=(U, V, int(a[np.argmax(np.abs(rem))])))
                 continue
             S = f(I[:, None], J[None, :])
-            U, V = _truncated_svd(S, tol)
+            U, V = _truncated_svd(S, tol, atol)
             R = S - U @ V.T
             e2, s2 = float(np.sum(R**2)), float(np.sum(S**2))
             n_fallback += 1
@@ -502,10 +529,12 @@ def hierarchical_matrix(partition: BlockPartition, entries, *, symmetry=1, tol=1
         norm2 += 2.0 * s2
         ranks.append(U.shape[1])
         # block (s, t): U V^T; block (t, s): symmetry V U^T
-        lefts += [(s, U), (t, symmetry * V)]
-        rights += [(t, V), (s, U)]
-    R = 2 * int(sum(ranks))
+        k, o = U.shape[1], len(pairing)
+        lefts += [(s, U), (t, V)]
+        pairing += list(range(o + k, o + 2 * k)) + list(range(o, o + k))
+        signs += [1.0] * k + [float(symmetry)] * k
+    R = len(pairing)
     left = _stack(lefts, N, R, tree)
-    right = _stack(rights, N, R, tree).T.tocsr()
-    return HierarchicalMatrix(near, left, right, np.asarray(ranks, dtype=np.intp),
+    return HierarchicalMatrix(near, symmetry, left, np.asarray(pairing, dtype=np.intp),
+                              np.asarray(signs), np.asarray(ranks, dtype=np.intp),
                               float(np.sqrt(norm2)), float(np.sqrt(err2)), n_fallback)
