@@ -1,10 +1,11 @@
 """Hierarchical pair Hessian of the adhesion energy against the assembled sparse one.
 
 For the CHA scenario's crenellated start (Table T1's kernel, ``l* = 0.1``, finite
-differences) at N = 1200, 2400, 4800 (and 10^4 with ``--large``): the interacting
-pairs; the build time of :func:`~qsa.energies.adhesion_far.hierarchical_pair_hessian`
-(tree, partition, six compressed pair functions) and its memory (near entries and far
-factors, as stored); the far blocks' median and maximum rank; the product time of
+differences) at N = 1200, 2400, 4800 (``--quick``: the first two; ``--large``: and
+10^4): the interacting pairs; the build time of
+:func:`~qsa.energies.adhesion_far.hierarchical_pair_hessian` (tree, partition, six
+compressed pair functions) and its memory (all, and the near field's part, as stored);
+the near pairs per node; the far blocks' median and maximum rank; the product time of
 ``K V`` for a block of 8 random vectors, hierarchical and assembled (CSR, with its
 assembly time and memory); and the relative product error against the assembled
 matrix with the built-in estimate. Both forms' memory is estimated first (about
@@ -13,7 +14,7 @@ form is skipped above 8 GB, or above the memory available, with a message. Times
 CPU seconds (``time.process_time``), the minimum of 3 product repeats, single-threaded
 BLAS.
 
-Run: ``python benchmarks/bench_far_field.py [--large] [--tol 1e-10]``
+Run: ``python benchmarks/bench_far_field.py [--quick | --large] [--tol 1e-10]``
 """
 
 from __future__ import annotations
@@ -86,10 +87,11 @@ def run(N, tol, leaf):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--large", action="store_true", help="add N = 10^4")
+    ap.add_argument("--quick", action="store_true", help="N = 1200 and 2400 only")
     ap.add_argument("--tol", type=float, default=1e-10)
     ap.add_argument("--leaf", type=int, default=64)
     args = ap.parse_args(argv)
-    sizes = [1200, 2400, 4800] + ([10_000] if args.large else [])
+    sizes = [1200, 2400] + ([] if args.quick else [4800]) + ([10_000] if args.large else [])
     print(f"tol = {args.tol:g}, leaf size {args.leaf}; CPU seconds; product: 8 vectors")
     head = ("N", "pairs", "build s", "H mem (near)", "near/node", "rank med/max", "H KV s",
             "asm s", "K mem", "K KV s", "rel err", "estimate")
