@@ -189,8 +189,9 @@ class BlockPartition:
 
     def within_cutoff(self, rows, cols) -> np.ndarray:
         """Boolean mask of the pairs ``(rows, cols)`` (broadcast) within the cutoff."""
-        d = self.tree.points[rows] - self.tree.points[cols]
-        return np.einsum("...k,...k->...", d, d) <= self.cutoff**2
+        p = self.tree.points
+        dx, dy = p[rows, 0] - p[cols, 0], p[rows, 1] - p[cols, 1]
+        return dx * dx + dy * dy <= self.cutoff**2
 
 
 def block_partition(tree: ClusterTree, eta=1.0, cutoff=np.inf) -> BlockPartition:

@@ -113,3 +113,12 @@ def test_bad_input():
         H.block_matvec("xx", np.ones(63))
     with pytest.raises(ValueError, match="V has shape"):
         H @ np.ones(64)
+
+
+def test_single_leaf_is_the_exact_sparse_matrix():
+    c, k = _smooth_curve(40, 5), AdhesionKernel(10.0, 0.3, 1.0)
+    H = hierarchical_pair_hessian(k, *c.positions(), c.dsigma)
+    assert len(H.partition.far) == 0 and H.far_factor_entries == 0
+    K, _ = _exact(k, c)
+    V = np.random.default_rng(4).standard_normal((120, 2))
+    assert np.allclose(H @ V, K @ V, rtol=0, atol=1e-13 * np.abs(K).max())
