@@ -31,7 +31,7 @@ Error control: ``||G - G~||_F <~ tol ||G||_F`` for each of the six functions
 (``error_estimates``), so a product with a block of random vectors has a relative
 error of about ``tol`` (the diagonals add at most the same again).
 
-Memory: the near pairs (about 200-250 per node for compact states at ``l* = 0.1``,
+Memory: the near pairs (about 250-300 per node for compact states at ``l* = 0.1``,
 independent of ``N``) plus the far factors, against ~0.8 kB per pair for the assembled
 blocks. This is a library piece: the spectrum solvers do not use it yet.
 """

@@ -390,6 +390,7 @@ class HierarchicalMatrix:
 
     @property
     def shape(self):
+        """``(N, N)``."""
         return self.near.shape
 
     @property
