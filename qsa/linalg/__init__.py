@@ -5,6 +5,9 @@
   O(N) memory and products) and ``ReducedHessian`` (the Hessian of an energy whose
   state is defined implicitly by sparse equations: dense as a matrix, O(nnz) in
   factored form), with ``to_dense`` and ``is_matrix_like``.
+* :mod:`qsa.linalg.hierarchical` -- matrices of pair functions of points as an exact
+  near field plus low-rank far blocks (cluster tree, adaptive cross approximation
+  with an a posteriori error estimate): O(N log N) storage for smooth kernels.
 * :mod:`qsa.linalg.lu` -- :func:`factorize` (dense LAPACK, sparse SuperLU, or either
   with a thin border; ``det_sign``) and :class:`LowRankUpdate` (Woodbury): the one LU
   of the package.
