@@ -146,53 +146,67 @@ def smallest_singular(J, v0=None, iterations=4):
     return sig[::-1], u, v
 
 
-def _correct(system, x, tau, u, v, target, maxiter, ctol, scale, energy, check_curve):
-    """Newton on ``[F(x) + tau u; <v, x> - target] = 0``: ``(x, tau, iterations)`` or None."""
-    n = system.size
-    for it in range(maxiter + 1):
-        if not x[system.N] > 0:
-            return None
-        try:
-            c = system.curve(x)
-            G = system.residual(x, energy) + tau * u
-        except ValueError:
-            return None
-        g = float(v @ x - target)
-        r = system.scaled_norm(G, c, scale)
-        if not np.isfinite(r):
-            return None
-        if r <= ctol and abs(g) <= 1e-12 * max(np.abs(v * x).sum(), 1.0):
-            if check_curve and c.self_intersects():
-                return None
-            return x, tau, it
-        if it == maxiter:
-            return None
-        try:
-            M = bordered_matrix(system.jacobian_parts(x, energy), u, v, 0.0)
-            rhs = np.zeros(M.shape[0])
-            rhs[:n] = G
-            rhs[n] = g
-            d = factorize(M).solve(rhs)
-        except (np.linalg.LinAlgError, RuntimeError, ValueError):
-            return None
-        if not np.all(np.isfinite(d[:n + 1])):
-            return None
-        x = x - d[:n]
-        tau = tau - d[n]
-    return None
+class _Bordered:
+    """The bordered system ``[F(x) + tau u; <v, x> - target]`` in unknowns ``y = (x, tau)``.
+
+    It offers what :func:`~qsa.equilibria.newton.newton_solve` needs of a system, so that
+    the corrector is Newton's method with its line search (the natural monotonicity test).
+    """
+
+    def __init__(self, system, u, v, target):
+        self.system, self.u, self.v, self.target = system, u, v, float(target)
+        self.energy = system.energy
+        self.N = system.N
+        self.size = system.size + 1
+
+    def curve(self, y):
+        return self.system.curve(y[:-1])
+
+    def residual(self, y, energy=None):
+        x = y[:-1]
+        return np.append(self.system.residual(x, energy) + y[-1] * self.u,
+                         self.v @ x - self.target)
+
+    def jacobian(self, y, energy=None):
+        return bordered_matrix(self.system.jacobian_parts(y[:-1], energy), self.u, self.v, 0.0)
+
+    def scaled_parts(self, F, c, scale):
+        parts = self.system.scaled_parts(F[:-1], c, scale)
+        return np.append(parts, abs(F[-1]) / max(float(np.max(np.abs(c.kappa))), 1.0))
+
+    def scaled_norm(self, F, c, scale):
+        return float(np.max(self.scaled_parts(F, c, scale)))
+
+    def step_norm(self, dy, y, scale):
+        return float(np.hypot(self.system.step_norm(dy[:-1], y[:-1], scale), dy[-1] / scale))
+
+
+def _correct(system, x, tau, u, v, target, maxiter, ctol, solve, energy, check_curve):
+    """Newton (``solve``) on ``[F(x) + tau u; <v, x> - target] = 0``.
+
+    Returns ``(x, tau, NewtonRun)``, or ``(None, None, NewtonRun)`` when it failed or
+    reached a curve that crosses itself.
+    """
+    bordered = _Bordered(system, u, v, target)
+    run = solve(bordered, np.append(x, tau), ctol, maxiter, energy=energy)
+    if not run.success or (check_curve and system.curve(run.x[:-1]).self_intersects()):
+        return None, None, run
+    return run.x[:-1], float(run.x[-1]), run
 
 
 def _frame(system, x, v_prev, u_prev, energy):
-    """``(sigma, u, v, J)`` at ``x``: the soft singular pair, signs kept from the last."""
+    """``(sigma, u, v)`` at ``x``: the soft singular pair, each oriented like the last."""
     J = system.jacobian(x, energy)
     n = system.size
     sig, u, v = smallest_singular(J, None if v_prev is None else
                                   np.concatenate([v_prev, np.zeros(J.shape[0] - n)]))
     u, v = u[:n], v[:n]
+    # each vector keeps its orientation on its own: where the soft singular value passes
+    # through 0 (det J changes sign) one of the pair flips, and tau would jump sign
     if v_prev is not None and v @ v_prev < 0:
-        u, v = -u, -v
-    elif v_prev is None and u_prev is not None and u @ u_prev < 0:
-        u, v = -u, -v
+        v = -v
+    if u_prev is not None and u @ u_prev < 0:
+        u = -u
     return sig, u / np.linalg.norm(u), v / np.linalg.norm(v)
 
 
@@ -260,12 +274,11 @@ def soft_mode_newton(system, x0, solve, *, tol=1e-10, maxiter=30, newton_maxiter
         sig, u, v = _frame(system, x0, None, None, energy)
     except (np.linalg.LinAlgError, RuntimeError, ValueError):
         return run("stalled")
-    out = _correct(system, x0, -float(u @ F0), u, v, float(v @ x0), 4 * corrector_maxiter,
-                   ctol, scale, energy, check_curve)
-    if out is None:
+    x, tau, cr = _correct(system, x0, -float(u @ F0), u, v, float(v @ x0),
+                          4 * corrector_maxiter, ctol, solve, energy, check_curve)
+    n_lu += cr.n_lu
+    if x is None:
         return run("stalled")
-    x, tau, its = out
-    n_lu += its
     s = 0.0
     last_try = r0
     while True:
@@ -314,19 +327,19 @@ def soft_mode_newton(system, x0, solve, *, tol=1e-10, maxiter=30, newton_maxiter
         ds = float(np.clip(ds, -step_max / size, step_max / size))
         accepted = False
         while n_steps + n_rejected < maxiter:
-            out = _correct(system, x + ds * t, tau + ds * dtau, u, v, float(v @ x) + ds,
-                           corrector_maxiter, ctol, scale, energy, check_curve)
-            if out is not None:
+            xc, tc, cr = _correct(system, x + ds * t, tau + ds * dtau, u, v,
+                                  float(v @ x) + ds, corrector_maxiter, ctol, solve, energy,
+                                  check_curve)
+            n_lu += cr.n_lu
+            if xc is not None:
                 accepted = True
                 break
             n_rejected += 1
-            n_lu += corrector_maxiter
             ds /= 4
         if not accepted:
             reason = "stalled" if n_rejected else "steps"
             break
-        x, tau, its = out
-        n_lu += its
+        x, tau = xc, tc
         n_steps += 1
         s += abs(ds) * size
     return run(reason)

@@ -72,3 +72,51 @@ def test_soft_mode_newton_on_finite_differences():
     assert run.success
     F = S.residual(run.x)
     assert S.scaled_norm(F, S.curve(run.x), residual_scale(EQ.energy, c)) <= 1e-9
+
+
+# ---------------------------------------------------------------- polish with a soft mode
+def folded_rho14():
+    """The folded CHA state of f:fold at rho = 1.4 (Table T1, l* = 0.1): the 1200-node
+    flow's state at t = 30, resampled to Fourier(601), with its energy."""
+    from pathlib import Path
+
+    from qsa.paper.folded import folded_energy
+
+    d = np.load(Path(__file__).parents[1] / "reference" / "folded_rho14_601.npz")
+    kappa = d["kappa"]
+    c = Curve(kappa, np.full(kappa.size, float(d["L"])), Fourier(kappa.size),
+              float(d["theta0"]), d["origin"])
+    return folded_energy(0.08, 60.0, 1.4 * float(d["L0"]), 40.0, 0.1, 1.0), c
+
+
+def test_polish_through_the_soft_mode_of_a_folded_state():
+    """J has a near-singular direction (smallest singular values 1.8e-5 and 2.8e-3): the
+    Newton steps, almost entirely along it, overshoot and Newton fails; with the soft
+    coordinate fixed the other equations solve, and Newton converges from there."""
+    E, c = folded_rho14()
+    S = EquilibriumSystem(E, c)
+    sig = smallest_singular(S.jacobian(S.pack(c)))[0]
+    assert sig[0] < 1e-2 * sig[1]
+    assert not polish(E, c, maxiter=10, globalize=False).success
+    res = polish(E, c, maxiter=10)
+    assert res.success and res.history[-1] <= 1e-10
+    assert "soft-mode Newton" in res.message and "pseudo-transient" not in res.message
+    assert not res.curve.self_intersects()
+    # near the flow's state, and below its energy
+    assert E.energy(res.curve) < E.energy(c)
+    assert abs(res.curve.length() / c.length() - 1) < 1e-3
+    # an equilibrium: a fixed point of plain Newton
+    again = polish(E, res.curve, globalize=False)
+    assert again.success and again.n_newton <= 1
+
+
+@pytest.mark.slow
+def test_the_old_globalization_fails_on_the_folded_state(monkeypatch):
+    """Without the soft-mode stage, Newton and pseudo-transient continuation stall."""
+    import qsa.equilibria.newton as newton
+
+    E, c = folded_rho14()
+    monkeypatch.setattr(newton, "SOFT_RATIO", 0.0)
+    res = polish(E, c, maxiter=10)
+    assert not res.success and res.history[-1] > 1e-6
+    assert "pseudo-transient" in res.message and "soft-mode" not in res.message
