@@ -461,9 +461,9 @@ def _soft_stage(system, x0, first: NewtonRun, tol, maxiter, line_search):
             f"{sig[1]:.2g}): {sm.n_steps} steps along the soft mode{tau}, "
             f"{SOFT_REASONS[sm.reason]}, after the first Newton solve failed "
             f"({MESSAGES[first.status]})")
-    if not sm.success:
-        return None, note, sm.n_newton, sm.n_lu + 1
     nr = sm.newton
+    if nr is None or not nr.success:
+        return None, note, sm.n_newton, sm.n_lu + 1
     return NewtonRun(nr.x, nr.status, nr.history, first.n_newton + sm.n_newton,
                      first.n_lu + sm.n_lu + 1, nr.noise_floor), note, sm.n_newton, sm.n_lu + 1
 

@@ -9,8 +9,9 @@ system ::
 
     F(x) + tau u = 0,      <v, x - x_ref> = s                    (size + 1 equations)
 
-is well conditioned (its smallest singular value is ``J``'s second smallest), and
-Newton's method solves it for ``(x(s), tau(s))``: every equation but the soft one holds
+is well conditioned (its smallest singular value is about ``J``'s second smallest),
+and Newton's method (:func:`~qsa.equilibria.newton.newton_solve`, with its line search)
+solves it for ``(x(s), tau(s))``: every equation but the soft one holds
 and ``tau(s)`` is what is left of the residual. The equilibria are the roots of the
 scalar ``tau(s)``, found by Newton's method on it (``ds = -tau / tau'``, with ``tau'``
 from the tangent ``[[J, u], [v^T, 0]] (x', tau') = (0, 1)``), each step capped in the
@@ -322,6 +323,9 @@ def soft_mode_newton(system, x0, solve, *, tol=1e-10, maxiter=30, newton_maxiter
                 reason = "extremum"
                 break
         if n_steps + n_rejected >= maxiter:
+            break
+        if not (np.isfinite(dtau) and dtau != 0):
+            reason = "stalled"
             break
         ds = -tau / dtau                          # Newton on tau(s), in units of <v, x>
         ds = float(np.clip(ds, -step_max / size, step_max / size))
