@@ -35,7 +35,7 @@ from qsa.linalg import factorize
 if TYPE_CHECKING:
     from qsa.equilibria.newton import NewtonRun
 
-__all__ = ["HomotopyRun", "newton_homotopy", "state_weights"]
+__all__ = ["HomotopyRun", "bordered_solve", "newton_homotopy", "state_weights"]
 
 #: Why a path ended (``HomotopyRun.reason``).
 REASONS = {
@@ -132,20 +132,28 @@ def state_weights(system, x, scale):
     return W
 
 
-def _solve(M, rhs):
-    out = factorize(M).solve(rhs)
+def bordered_solve(system, x, column, row, corner, head, last, energy=None):
+    """Solve ``[[J(x), column], [row, corner]] z = (head, last)``; returns ``z[:size + 1]``.
+
+    ``head`` is the right-hand side of the rows of ``F`` (0 for a tangent); the rows of
+    the unknowns the Newton matrix unfolds get 0. Raises ``LinAlgError`` on a singular
+    or non-finite solve.
+    """
+    n = system.size
+    M = bordered_matrix(system.jacobian_parts(x, energy), column, row, corner)
+    rhs = np.zeros(M.shape[0])
+    rhs[:n] = head
+    rhs[n] = last
+    out = factorize(M).solve(rhs)[:n + 1]
     if not np.all(np.isfinite(out)):
         raise np.linalg.LinAlgError("non-finite solution")
     return out
 
 
 def _tangent(system, x, w, row, energy):
-    """Unit tangent (weighted) of the path at ``x``: ``J t_x = w t_p`` with ``<row, t> = 1``."""
+    """Tangent of the path at ``x``: ``J t_x = w t_p`` with ``<row, t> = 1``."""
     n = system.size
-    M = bordered_matrix(system.jacobian_parts(x, energy), -w, row[:n], row[n])
-    rhs = np.zeros(M.shape[0])
-    rhs[n] = 1.0
-    return _solve(M, rhs)[:n + 1]
+    return bordered_solve(system, x, -w, row[:n], row[n], 0.0, 1.0, energy)
 
 
 def _correct(system, y_pred, t, w, W, scale, ctol, maxiter, energy, check_curve):
@@ -173,11 +181,7 @@ def _correct(system, y_pred, t, w, W, scale, ctol, maxiter, energy, check_curve)
         if it == maxiter:
             return None
         try:
-            M = bordered_matrix(system.jacobian_parts(x, energy), -w, row[:n], row[n])
-            rhs = np.zeros(M.shape[0])
-            rhs[:n] = H
-            rhs[n] = g
-            y = y - _solve(M, rhs)[:n + 1]
+            y = y - bordered_solve(system, x, -w, row[:n], row[n], H, g, energy)
         except (np.linalg.LinAlgError, RuntimeError, ValueError):
             return None
     return None

@@ -33,9 +33,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from qsa.energies.constrained import residual_scale
-from qsa.equilibria.homotopy import state_weights
+from qsa.equilibria.homotopy import bordered_solve, state_weights
 from qsa.equilibria.system import bordered_matrix
-from qsa.linalg import factorize
 
 if TYPE_CHECKING:
     from qsa.equilibria.newton import NewtonRun
@@ -294,10 +293,7 @@ def soft_mode_newton(system, x0, solve, *, tol=1e-10, maxiter=30, newton_maxiter
             n_lu += 2
             sig, u, v = _frame(system, x, v, u, energy)
             tau = -float(u @ F)
-            M = bordered_matrix(system.jacobian_parts(x, energy), u, v, 0.0)
-            rhs = np.zeros(M.shape[0])
-            rhs[n] = 1.0
-            d = factorize(M).solve(rhs)
+            d = bordered_solve(system, x, u, v, 0.0, 0.0, 1.0, energy)
         except (np.linalg.LinAlgError, RuntimeError, ValueError):
             reason = "stalled"
             break
