@@ -21,7 +21,7 @@ from qsa.continuation.branch import BranchPoint
 from qsa.curve import Curve
 from qsa.energies import residual_scale
 from qsa.equilibria.newton import NewtonRun, at_round_off_floor, polish_result
-from qsa.equilibria.system import EquilibriumSystem, assemble_jacobian
+from qsa.equilibria.system import EquilibriumSystem, assemble_jacobian, bordered_matrix
 from qsa.linalg import factorize
 
 __all__ = ["Problem", "tangent", "corrector", "equilibrium", "make_point", "parse_span",
@@ -113,18 +113,9 @@ class Problem:
 
     def augmented(self, x, p, row):
         """Factor of ``[[F_x, F_p], [row]]`` (row on ``(x, p)``), and of ``F_x`` alone."""
-        A, B, Crows, D, low = self.parts(x, p)
-        Fp = self.F_p(x, p)
-        N = self.N
-        B2 = np.column_stack([B, Fp[:N]])
-        C2 = np.vstack([Crows, row[:N]])
-        D2 = np.zeros((D.shape[0] + 1, D.shape[1] + 1))
-        D2[:-1, :-1] = D
-        D2[:-1, -1] = Fp[N:]
-        D2[-1, :-1] = row[N:-1]
-        D2[-1, -1] = row[-1]
-        aug = assemble_jacobian(A, B2, C2, D2, low)
-        return aug, assemble_jacobian(A, B, Crows, D, low)
+        parts = self.parts(x, p)
+        aug = bordered_matrix(parts, self.F_p(x, p), row[:-1], row[-1])
+        return aug, assemble_jacobian(*parts)
 
 
 def _solve_aug(aug, rhs):

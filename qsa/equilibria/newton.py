@@ -21,6 +21,8 @@ from qsa.curve import Curve, check_simple
 from qsa.energies import Energy
 from qsa.energies.constrained import multipliers, normal_velocity, residual_scale
 from qsa.equilibria.result import Equilibrium
+from qsa.equilibria.softmode import REASONS as SOFT_REASONS
+from qsa.equilibria.softmode import smallest_singular, soft_mode_newton
 from qsa.equilibria.system import EquilibriumSystem, equal_arclength
 from qsa.equilibria.transient import pseudo_transient
 from qsa.linalg import factorize
@@ -356,11 +358,15 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
         ``n_A = 1``), the multipliers ``mu_i`` unknowns of the Newton system
         (:mod:`qsa.equilibria.constraint_terms`).
     globalize : bool
-        When Newton's method from the guess fails, follow the gradient flow by
-        pseudo-transient continuation (:func:`~qsa.equilibria.transient.pseudo_transient`,
-        at most ``10 maxiter`` implicit flow steps growing into Newton steps) and try
-        Newton again from the states it reaches (default True). The message says
-        how many flow steps it took.
+        When Newton's method from the guess fails (default True): if the Jacobian at
+        the guess has a soft mode (its smallest singular value below
+        :data:`SOFT_RATIO` of the next), solve the other equations with the soft
+        coordinate fixed and Newton's method on the soft residual
+        (:func:`~qsa.equilibria.softmode.soft_mode_newton`); else, or if that fails,
+        follow the gradient flow by pseudo-transient continuation
+        (:func:`~qsa.equilibria.transient.pseudo_transient`, at most ``10 maxiter``
+        implicit flow steps growing into Newton steps) and try Newton again from the
+        states it reaches. The message says which and how many steps it took.
 
     Returns
     -------
@@ -430,15 +436,52 @@ def polish(energy, curve: Curve, tol=1e-10, maxiter=30, *, line_search=True,
     return res
 
 
+#: A Jacobian whose smallest singular value is below this fraction of the next one has a
+#: soft mode: a failed Newton solve is first retried by :func:`soft_mode_newton`.
+SOFT_RATIO = 0.05
+
+
+def _soft_stage(system, x0, first: NewtonRun, tol, maxiter, line_search):
+    """:func:`soft_mode_newton` from ``x0`` when ``J(x0)`` has a soft mode.
+
+    Returns ``(run, note, n_newton, n_lu)``: the converged :class:`NewtonRun` (or None),
+    the message's note and the work done; ``(None, "", 0, 0)`` without a soft mode (or
+    when ``J`` cannot be factored).
+    """
+    try:
+        sig = smallest_singular(system.jacobian(x0))[0]
+    except (RuntimeError, np.linalg.LinAlgError, ValueError):
+        return None, "", 0, 1
+    if not sig[0] <= SOFT_RATIO * sig[1]:
+        return None, "", 0, 1
+    sm = soft_mode_newton(system, x0, newton_solve, tol=tol, maxiter=min(maxiter, 30),
+                          newton_maxiter=min(maxiter, 12), line_search=line_search)
+    tau = f", soft residual tau {sm.tau[-1]:.2g}" if sm.tau.size else ""
+    note = (f"; soft-mode Newton (smallest singular values of J {sig[0]:.2g} and "
+            f"{sig[1]:.2g}): {sm.n_steps} steps along the soft mode{tau}, "
+            f"{SOFT_REASONS[sm.reason]}, after the first Newton solve failed "
+            f"({MESSAGES[first.status]})")
+    nr = sm.newton
+    if nr is None or not nr.success:
+        return None, note, sm.n_newton, sm.n_lu + 1
+    return NewtonRun(nr.x, nr.status, nr.history, first.n_newton + sm.n_newton,
+                     first.n_lu + sm.n_lu + 1, nr.noise_floor), note, sm.n_newton, sm.n_lu + 1
+
+
 def _globalized(system, x0, first: NewtonRun, tol, maxiter, line_search):
-    """The pseudo-transient rescue of a failed Newton solve, as one :class:`NewtonRun`."""
+    """The rescue of a failed Newton solve, as one :class:`NewtonRun`: soft-mode Newton
+    when ``J`` has a soft mode, else (or when it fails) pseudo-transient continuation."""
+    soft, soft_note, soft_newton, soft_lu = _soft_stage(system, x0, first, tol, maxiter,
+                                                         line_search)
+    if soft is not None:
+        return soft, soft_note
     tr = pseudo_transient(system, x0, newton_solve, tol=tol, maxiter=10 * maxiter,
                           newton_maxiter=min(maxiter, 12), line_search=line_search)
-    n_newton = first.n_newton + tr.n_newton
-    n_lu = first.n_lu + tr.n_lu
-    flow = (f"; {tr.n_steps} pseudo-transient flow steps ({tr.n_rejected} rejected, "
-            f"pseudo time {tr.time:.3g}) and {tr.n_attempts} Newton solves after the first "
-            f"failed ({MESSAGES[first.status]})")
+    n_newton = first.n_newton + soft_newton + tr.n_newton
+    n_lu = first.n_lu + soft_lu + tr.n_lu
+    flow = (f"{soft_note}; {tr.n_steps} pseudo-transient flow steps ({tr.n_rejected} "
+            f"rejected, pseudo time {tr.time:.3g}) and {tr.n_attempts} Newton solves after "
+            f"the first failed ({MESSAGES[first.status]})")
     nr = tr.newton
     if tr.success and nr is not None:
         return NewtonRun(nr.x, nr.status, nr.history, n_newton, n_lu, nr.noise_floor), flow

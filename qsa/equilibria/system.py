@@ -74,7 +74,7 @@ from qsa.equilibria.two_point_terms import (
 from qsa.geometry import laplace_s
 from qsa.linalg import SparsePlusLowRank
 
-__all__ = ["EquilibriumSystem", "assemble_jacobian", "equal_arclength"]
+__all__ = ["EquilibriumSystem", "assemble_jacobian", "bordered_matrix", "equal_arclength"]
 
 
 def _blocks(H, N):
@@ -423,6 +423,46 @@ class EquilibriumSystem:
         """
         A, B, Crows, D, low = self.jacobian_parts(x, energy)
         return assemble_jacobian(A, B, Crows, D, low)
+
+    def bordered_jacobian(self, x, column, row, corner=0.0, energy=None):
+        """``[[dF/dx, column], [row, corner]]`` with one extra unknown and one extra equation.
+
+        The extra unknown follows ``x`` (index ``size``) and the extra equation follows
+        the rows of ``F`` (index ``size``); any unknowns the Newton matrix unfolds
+        (low-rank terms, implicit states) come after them, with zero right-hand side.
+        The matrix of continuation's tangent and corrector.
+
+        Parameters
+        ----------
+        x : ndarray, shape (size,)
+        column : ndarray, shape (size,)
+            Derivative of ``F`` with respect to the extra unknown.
+        row : ndarray, shape (size,)
+            Derivative of the extra equation with respect to ``x``.
+        corner : float
+            Derivative of the extra equation with respect to the extra unknown.
+        energy : Energy, optional
+
+        Returns
+        -------
+        sparse CSC matrix or ndarray
+            Square, of size ``size + 1`` plus the unfolded unknowns.
+        """
+        return bordered_matrix(self.jacobian_parts(x, energy), column, row, corner)
+
+
+def bordered_matrix(parts, column, row, corner=0.0):
+    """:meth:`EquilibriumSystem.bordered_jacobian` from the blocks of ``jacobian_parts``."""
+    A, B, Crows, D, low = parts
+    N = A.shape[0]
+    B2 = np.column_stack([B, column[:N]])
+    C2 = np.vstack([Crows, row[:N]])
+    D2 = np.zeros((D.shape[0] + 1, D.shape[1] + 1))
+    D2[:-1, :-1] = D
+    D2[:-1, -1] = column[N:]
+    D2[-1, :-1] = row[N:]
+    D2[-1, -1] = corner
+    return assemble_jacobian(A, B2, C2, D2, low)
 
 
 def assemble_jacobian(A, B, Crows, D, low):
