@@ -405,6 +405,30 @@ def _with_implicit_state(blocks, K, dgk, N):
     return out
 
 
+def local_blocks(op: FactoredNormalOperator, sigma: float):
+    """The ``3 x 3`` sparse blocks of the local system (module docstring), finite differences.
+
+    Parameters
+    ----------
+    op : FactoredNormalOperator
+    sigma : float
+
+    Returns
+    -------
+    list of list
+        Sparse blocks (``None`` for zero), ``N`` rows each.
+    """
+    N, w, gk, G, H = op.N, op.w, op.gk, op.G, op.H
+    Hkk, Hkg = H[:N, :N], H[:N, N:]
+    Hgk, Hgg = H[N:, :N], H[N:, N:]
+    I = sp.identity(N, format="csr")
+    dgk = sp.diags(gk)
+    A11 = -sigma * sp.diags(w) - dgk @ Hgg @ dgk
+    return [[A11, -(dgk @ Hgk), -G.T],
+            [-(Hkg @ dgk), -Hkk, I],
+            [-G, I, None]]
+
+
 class ShiftInvert:
     """``(W J - sigma W)^{-1}`` on the ``<.,.>``-complement of the deflated span, never forming J.
 
@@ -469,12 +493,8 @@ class ShiftInvert:
         Hkk, Hkg = H[:N, :N], H[:N, N:]
         Hgk, Hgg = H[N:, :N], H[N:, N:]
         if sparse:
-            I = sp.identity(N, format="csr")
             dgk = sp.diags(gk)
-            A11 = -sigma * sp.diags(w) - dgk @ Hgg @ dgk
-            blocks = [[A11, -(dgk @ Hgk), -G.T],
-                      [-(Hkg @ dgk), -Hkk, I],
-                      [-G, I, None]]
+            blocks = local_blocks(op, sigma)
             local = blocks
             if op.reduced is not None:
                 blocks = _with_implicit_state(blocks, op.reduced, dgk, N)

@@ -1,0 +1,85 @@
+"""The capacitance solve by GMRES, and the reduced Hessian with an operator pair term."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from qsa import Curve, FiniteDifference
+from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
+from qsa.energies.adhesion import AdhesionKernel, adhesion_pairs
+from qsa.energies.adhesion_far import hierarchical_pair_hessian
+from qsa.energies.adhesion_hessian import adhesion_derivatives
+from qsa.spectra import FactoredNormalOperator, lagrange_hessian
+from qsa.spectra.capacitance import CapacitanceCore
+from qsa.spectra.capacitance_iterative import IterativeCapacitanceCore
+from qsa.spectra.factored import local_blocks
+
+KERNEL = AdhesionKernel(10.0, 0.1, 1.0)
+TOL = 1e-10
+
+
+def _state(N):
+    c = Curve.polar(lambda t: 1 + 0.3 * np.cos(3 * t) + 0.05 * np.sin(5 * t),
+                    FiniteDifference(N))
+    E = (CanhamHelfrich(0.1) + Perimeter(1.0, 1.2 * c.length())
+         + Adhesion(A0=KERNEL.A0, l_star=KERNEL.l_star, a=KERNEL.a))
+    LH = lagrange_hessian(E, c, constraints="curvature").matrix
+    op = FactoredNormalOperator.from_lagrangian(c, LH)
+    d = adhesion_derivatives(KERNEL, c, adhesion_pairs(KERNEL, *c.positions()))
+    return c, op, d
+
+
+@pytest.fixture(scope="module")
+def state():
+    return _state(400)
+
+
+def test_operator_pair_term_with_the_assembled_pairs_is_the_reduced_hessian(state):
+    c, _, d = state
+    R = d.reduced_hessian()
+    O = d.operator_reduced_hessian(d.pair_hessian())
+    X = np.random.default_rng(0).standard_normal((2 * c.N, 3))
+    assert np.linalg.norm(O @ X - R @ X) <= 1e-13 * np.linalg.norm(R @ X)
+    v, y, mu = O.implicit_state(X[:, 0], 1.0, 2.0, 3.0)
+    v0, y0, mu0 = R.implicit_state(X[:, 0], 1.0, 2.0, 3.0)
+    for a, b in ((v, v0), (y, y0), (mu, mu0)):
+        assert np.linalg.norm(a - b) <= 1e-13 * np.linalg.norm(b)
+
+
+def test_operator_pair_term_compressed_within_its_tolerance(state):
+    c, _, d = state
+    R = d.reduced_hessian()
+    H = hierarchical_pair_hessian(KERNEL, *c.positions(), c.dsigma, tol=TOL, leaf_size=32)
+    assert H.far_factor_entries > 0  # some blocks are compressed
+    O = d.operator_reduced_hessian(H)
+    X = np.random.default_rng(1).standard_normal((2 * c.N, 3))
+    err = np.linalg.norm(O @ X - R @ X) / np.linalg.norm(R @ X)
+    assert err <= 10 * TOL
+
+
+@pytest.mark.parametrize("compressed", [False, True])
+def test_gmres_capacitance_solves_like_the_lu(state, compressed):
+    c, op, d = state
+    K = op.reduced
+    if compressed:
+        H = hierarchical_pair_hessian(KERNEL, *c.positions(), c.dsigma, tol=TOL, leaf_size=32)
+        K = d.operator_reduced_hessian(H).with_left(K.left)
+    loc, dgk, N = local_blocks(op, 0.0), sp.diags(op.gk), c.N
+    lu = CapacitanceCore(loc, op.reduced, dgk, N)
+    it = IterativeCapacitanceCore(loc, K, dgk, N)
+    b = np.random.default_rng(2).standard_normal((lu.shape[0], 2))
+    want, got = lu.solve(b), it.solve(b)
+    assert it.failures == 0 and len(it.iterations) == 2
+    # T is well conditioned here (rcond ~ 1e-3): the phi's agree to the GMRES and
+    # compression tolerances times its condition
+    assert np.linalg.norm(got[:N] - want[:N]) <= 1e-7 * np.linalg.norm(want[:N])
+    assert np.linalg.norm(got - want) <= 1e-7 * np.linalg.norm(want)
+
+
+def test_gmres_capacitance_arguments(state):
+    c, op, _ = state
+    args = (local_blocks(op, 0.0), op.reduced, sp.diags(op.gk), c.N)
+    with pytest.raises(ValueError, match="rtol"):
+        IterativeCapacitanceCore(*args, rtol=2.0)
+    with pytest.raises(NotImplementedError):
+        IterativeCapacitanceCore(*args).det_sign()
