@@ -81,5 +81,20 @@ def test_gmres_capacitance_arguments(state):
     args = (local_blocks(op, 0.0), op.reduced, sp.diags(op.gk), c.N)
     with pytest.raises(ValueError, match="rtol"):
         IterativeCapacitanceCore(*args, rtol=2.0)
+    with pytest.raises(ValueError, match="deflate"):
+        IterativeCapacitanceCore(*args, deflate=5, arnoldi=5)
     with pytest.raises(NotImplementedError):
         IterativeCapacitanceCore(*args).det_sign()
+
+
+def test_deflation_cuts_the_iterations_not_the_solution(state):
+    c, op, _ = state
+    args = (local_blocks(op, 0.0), op.reduced, sp.diags(op.gk), c.N)
+    plain, deflated = IterativeCapacitanceCore(*args), IterativeCapacitanceCore(*args, deflate=60)
+    assert deflated.deflated > 0
+    b = np.zeros((plain.shape[0], 2))
+    b[:c.N] = np.random.default_rng(3).standard_normal((c.N, 2))
+    x, y = plain.solve(b), deflated.solve(b)
+    assert deflated.failures == 0
+    assert max(deflated.iterations) < min(plain.iterations) // 2
+    assert np.linalg.norm(x - y) <= 1e-8 * np.linalg.norm(x)
