@@ -49,6 +49,11 @@ WIDE_ROW = 120
 MIN_NODES = 400
 # a capacitance whose rcond is not above this is singular (SuperLU takes the system)
 MIN_RCOND = 0.0
+# solve T by deflated GMRES (qsa.spectra.capacitance_iterative) instead of its LU: off;
+# nothing of size N^2 is formed, but each solve costs tens of implicit-state products
+ITERATIVE = False
+# Ritz vectors of T deflated by the GMRES route, and Arnoldi steps to find them
+DEFLATE, ARNOLDI = 200, 300
 
 
 def use_capacitance(K, N) -> bool:

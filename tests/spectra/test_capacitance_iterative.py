@@ -9,7 +9,13 @@ from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.energies.adhesion import AdhesionKernel, adhesion_pairs
 from qsa.energies.adhesion_far import hierarchical_pair_hessian
 from qsa.energies.adhesion_hessian import adhesion_derivatives
-from qsa.spectra import FactoredNormalOperator, lagrange_hessian
+from qsa.spectra import (
+    FactoredNormalOperator,
+    certified_eigenpairs,
+    lagrange_hessian,
+    rigid_normal_basis,
+)
+from qsa.spectra import capacitance as cap
 from qsa.spectra.capacitance import CapacitanceCore
 from qsa.spectra.capacitance_iterative import IterativeCapacitanceCore
 from qsa.spectra.factored import local_blocks
@@ -98,3 +104,26 @@ def test_deflation_cuts_the_iterations_not_the_solution(state):
     assert deflated.failures == 0
     assert max(deflated.iterations) < min(plain.iterations) // 2
     assert np.linalg.norm(x - y) <= 1e-8 * np.linalg.norm(x)
+
+
+def test_eigenpairs_agree_between_lu_and_gmres_capacitance(monkeypatch):
+    # the GMRES route is switched off by default; forced here on a small state
+    c, op, _ = _state(440)
+    monkeypatch.setattr(cap, "MIN_NODES", 0)
+    monkeypatch.setattr(cap, "WIDE_ROW", 0)
+    monkeypatch.setattr(cap, "DEFLATE", 60)
+    monkeypatch.setattr(cap, "ARNOLDI", 120)
+    rigid = op.ritz(rigid_normal_basis(c))[0]
+    out = {}
+    for route, iterative in (("capacitance", False), ("gmres", True)):
+        monkeypatch.setattr(cap, "ITERATIVE", iterative)
+        assert op.shift_invert(0.0).core_solver == route
+        out[route] = certified_eigenpairs(op, np.zeros((0, c.N)), k=8, sigma=0.0, rigid=rigid)
+    a, b = out["capacitance"], out["gmres"]
+    assert np.all(b.errors <= 1e-8 * np.maximum(np.abs(b.values), 1.0))
+    assert np.allclose(np.sort(a.values), np.sort(b.values), rtol=0,
+                       atol=float(np.max(a.errors + b.errors)))
+
+
+def test_gmres_route_is_off_by_default():
+    assert cap.ITERATIVE is False
