@@ -17,7 +17,10 @@ allocations by ~20%), one with ``tracemalloc`` for the peak; neither sees the ot
 cached derivatives. Timings are single-threaded BLAS; wall-clock is noisy on a shared
 machine, CPU time less so.
 
-Run: ``python benchmarks/bench_folded.py [--quick] [--l-star 0.01] [--from FILE]``
+``--gmres`` solves the capacitance by deflated GMRES instead of its LU
+(``qsa.spectra.capacitance.ITERATIVE``; the assembled blocks are still needed).
+
+Run: ``python benchmarks/bench_folded.py [--quick] [--l-star 0.01] [--from FILE] [--gmres]``
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ from qsa.commands._memory import available_bytes, format_bytes
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.energies.adhesion import adhesion_pairs
 from qsa.paper.scenarios import CHAScenario
-from qsa.spectra import spectrum
+from qsa.spectra import capacitance, spectrum
 
 
 def state(scenario, N, source):
@@ -60,8 +63,9 @@ def energy_of(scenario, L0, method):
 BYTES_PER_PAIR = 1.2e3
 
 
-def _run(l_star, N, method, source, trace):
+def _run(l_star, N, method, source, trace, gmres=False):
     """One ``spectrum`` in this (fresh) process: wall and CPU seconds, peak traced bytes."""
+    capacitance.ITERATIVE = gmres
     scenario = CHAScenario(l_star=l_star)
     c = state(scenario, N, source)
     L0 = Curve.from_positions(*scenario.initial(N), FiniteDifference(N)).length()
@@ -85,7 +89,7 @@ def _fresh(*args):
         return pool.submit(_run, *args).result()
 
 
-def measure(scenario, N, method, source):
+def measure(scenario, N, method, source, gmres=False):
     c = state(scenario, N, source)
     E = energy_of(scenario, 1.0, method)
     x, y = c.positions()
@@ -95,8 +99,8 @@ def measure(scenario, N, method, source):
         print(f"N = {N}: skipped, {P} pairs need about {format_bytes(need)} "
               f"(available {format_bytes(have)})")
         return None
-    timed = _fresh(scenario.l_star, N, method, source, False)
-    traced = _fresh(scenario.l_star, N, method, source, True)
+    timed = _fresh(scenario.l_star, N, method, source, False, gmres)
+    traced = _fresh(scenario.l_star, N, method, source, True, gmres)
     return {"N": N, "pairs": P, "time": timed["time"], "cpu": timed["cpu"],
             "peak_MB": traced["peak"] / 1e6, "n_eig": timed["n_eig"],
             "nearest0": timed["nearest0"]}
@@ -122,11 +126,13 @@ def main():
                     help="Table T1's kernel length for the neighbour-list cases")
     ap.add_argument("--from", dest="source", default=None,
                     help="a folded state (flow result, checkpoint or equilibrium file)")
+    ap.add_argument("--gmres", action="store_true",
+                    help="the capacitance by deflated GMRES (capacitance.ITERATIVE)")
     args = ap.parse_args()
     Ns = [1200, 2400] if args.quick else [1200, 2400, 4800, 10_000]
     sc = CHAScenario(l_star=args.l_star)
     report(f"neighbour list, l* = {sc.l_star} (A0 = {sc.A0}, a = {sc.a}, rho = {sc.rho})",
-           [measure(sc, N, "neighbours", args.source) for N in Ns])
+           [measure(sc, N, "neighbours", args.source, args.gmres) for N in Ns])
     dense = CHAScenario(l_star=0.5)
     report("all pairs, l* = 0.5",
            [measure(dense, N, "dense", args.source) for N in ([1000] if args.quick

@@ -33,7 +33,9 @@ error of about ``tol`` (the diagonals add at most the same again).
 
 Memory: the near pairs (about 250-300 per node for compact states at ``l* = 0.1``,
 independent of ``N``) plus the far factors, against ~0.8 kB per pair for the assembled
-blocks. This is a library piece: the spectrum solvers do not use it yet.
+blocks. :meth:`AdhesionDerivatives.operator_reduced_hessian
+<qsa.energies.adhesion_hessian.AdhesionDerivatives.operator_reduced_hessian>` takes it
+as the pair term of the reduced Hessian; the spectrum solvers do not use it yet.
 """
 
 from __future__ import annotations

@@ -113,6 +113,7 @@ import scipy.sparse as sp
 from qsa.curve import Curve
 from qsa.discretize import cumulative_factors
 from qsa.linalg import BlockSparse, ReducedHessian
+from qsa.linalg.implicit import OperatorPairHessian
 
 __all__ = ["AdhesionDerivatives", "adhesion_derivatives", "cumulative_factors",
            "position_state_equations", "HESSIAN_FORMS"]
@@ -564,6 +565,46 @@ class AdhesionDerivatives:
         cY, cU = position_state_equations(c)
         ds = c.dsigma
         return ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=d(1.0 / np.concatenate([ds, ds])))
+
+    def operator_reduced_hessian(self, pair) -> OperatorPairHessian:
+        """:meth:`reduced_hessian` with the pair Hessian ``K`` applied by products only.
+
+        The sparse factors hold only the local parts (``beta``, ``p``, ``-g a``); ``K``
+        enters as ``S^T K S`` with ``S (u, y) = (y_x, y_y, omega u_g)``
+        (:class:`~qsa.linalg.implicit.OperatorPairHessian`).
+
+        Parameters
+        ----------
+        pair : object
+            ``K`` in the order ``(x, y, w)`` of :meth:`pair_hessian`, shape (3N, 3N),
+            with ``pair @ X``: the assembled matrix or
+            :class:`~qsa.energies.adhesion_far.HierarchicalPairHessian`.
+
+        Returns
+        -------
+        OperatorPairHessian, shape (2N, 2N)
+        """
+        c = self.curve
+        if not c.grid.sparse:
+            raise ValueError("operator_reduced_hessian needs a finite-difference grid")
+        N = c.N
+        if pair.shape != (3 * N, 3 * N):
+            raise ValueError(f"pair must have shape {(3 * N, 3 * N)}, got {pair.shape}")
+        g, om = c.g, c.grid.weights
+        d = sp.diags
+        Z = sp.csr_matrix((N, N))
+        bI = lambda v: d(np.broadcast_to(v, N).astype(float), format="csr")
+        grid = lambda blocks: BlockSparse(blocks).tocsr()
+        Luu = grid([[Z, bI(self.beta)], [bI(self.beta), Z]])
+        Lyu = grid([[Z, bI(self.p)], [Z, Z], [Z, Z]])
+        Lyy = grid([[bI(-g * self.a), Z, Z], [Z, Z, Z], [Z, Z, Z]])
+        cY, cU = position_state_equations(c)
+        ds = c.dsigma
+        local = ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=d(1.0 / np.concatenate([ds, ds])))
+        I = sp.identity(N, format="csr")
+        Su = grid([[Z, Z], [Z, Z], [Z, bI(om)]])
+        Sy = grid([[Z, I, Z], [Z, Z, I], [Z, Z, Z]])
+        return OperatorPairHessian(local, pair, Su, Sy)
 
     def hessian(self, form="auto"):
         """``nabla_I^2 E_A`` in ``<f, h> = sum f h dsigma``, ``dsigma``-self-adjoint.

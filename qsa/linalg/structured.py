@@ -426,14 +426,7 @@ class ReducedHessian:
 
         O(n k) memory and ``k`` products; meant for moderate sizes and checks.
         """
-        n, k = self.shape
-        out = np.empty((n, k))
-        for start in range(0, k, block):
-            stop = min(k, start + block)
-            E = np.zeros((k, stop - start))
-            E[np.arange(start, stop), np.arange(stop - start)] = 1.0
-            out[:, start:stop] = self @ E
-        return out
+        return dense_columns(self, block)
 
     def aslinearoperator(self):
         """``scipy.sparse.linalg.LinearOperator`` with O(nnz) products."""
@@ -716,6 +709,18 @@ class BlockSparse:
     def tocsr(self):
         """The assembled matrix (``scipy.sparse`` CSR)."""
         return self._assembled("csr")
+
+
+def dense_columns(A, block=256) -> np.ndarray:
+    """``A`` as a dense array from products ``A @ E`` with ``block`` unit columns at a time."""
+    n, k = A.shape
+    out = np.empty((n, k))
+    for start in range(0, k, block):
+        stop = min(k, start + block)
+        E = np.zeros((k, stop - start))
+        E[np.arange(start, stop), np.arange(stop - start)] = 1.0
+        out[:, start:stop] = A @ E
+    return out
 
 
 def _same(A, B) -> bool:

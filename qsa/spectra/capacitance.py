@@ -49,6 +49,11 @@ WIDE_ROW = 120
 MIN_NODES = 400
 # a capacitance whose rcond is not above this is singular (SuperLU takes the system)
 MIN_RCOND = 0.0
+# solve T by deflated GMRES (qsa.spectra.capacitance_iterative) instead of its LU: off;
+# nothing of size N^2 is formed, but each solve costs tens of implicit-state products
+ITERATIVE = False
+# Ritz vectors of T deflated by the GMRES route, and Arnoldi steps to find them
+DEFLATE, ARNOLDI = 200, 300
 
 
 def use_capacitance(K, N) -> bool:
@@ -104,19 +109,7 @@ class CapacitanceCore:
     """
 
     def __init__(self, local, K, dgk, N, block=2048):
-        self.N, self.K = N, K
-        p, q = K.Luu.shape[0], K.cY.shape[0]
-        self.p, self.q = p, q
-        self.shape = (3 * N + 2 * p + 2 * q,) * 2
-        self._A = factorize(sp.bmat(local, format="csc"))
-        Lk, Lg = K.left[:N], K.left[N:]
-        Rk, Rg = K.right[:, :N], K.right[:, N:]
-        G = sp.csr_matrix(local[2][0]) * -1.0  # the third block row is [-G, I, 0]
-        self._G = G
-        self.phi_only = False
-        self._Rk = sp.csr_matrix(Rk)
-        self._E = sp.vstack([-(dgk @ Lg), -Lk, sp.csr_matrix((N, p))], format="csr")
-        self._Q = sp.csr_matrix(Rg @ dgk + Rk @ G)
+        self._setup(local, K, dgk, N)
         KQ = K.core_matmat(self._Q, block=block)                  # (p, N)
         T = np.empty((N, N))                                      # [A^{-1} E K Q]_phi
         for start in range(0, N, block):
@@ -136,6 +129,22 @@ class CapacitanceCore:
             raise np.linalg.LinAlgError(f"ill-conditioned capacitance (rcond {self.rcond:.2e})")
         self.nnz = int(self._A.nnz + N * N)
 
+    def _setup(self, local, K, dgk, N):
+        """The local factors and the sparse maps ``E``, ``Q``, ``G`` (module docstring)."""
+        self.N, self.K = N, K
+        p, q = K.Luu.shape[0], K.cY.shape[0]
+        self.p, self.q = p, q
+        self.shape = (3 * N + 2 * p + 2 * q,) * 2
+        self._A = factorize(sp.bmat(local, format="csc"))
+        Lk, Lg = K.left[:N], K.left[N:]
+        Rk, Rg = K.right[:, :N], K.right[:, N:]
+        G = sp.csr_matrix(local[2][0]) * -1.0  # the third block row is [-G, I, 0]
+        self._G = G
+        self.phi_only = False
+        self._Rk = sp.csr_matrix(Rk)
+        self._E = sp.vstack([-(dgk @ Lg), -Lk, sp.csr_matrix((N, p))], format="csr")
+        self._Q = sp.csr_matrix(Rg @ dgk + Rk @ G)
+
     def solve(self, b):
         """``x`` with ``core x = b``; ``b`` of shape (n,) or (n, k)."""
         b = np.asarray(b, dtype=float)
@@ -147,7 +156,7 @@ class CapacitanceCore:
             z0 = self._A.solve(bz - self._E @ self.K.implicit_state(u0, b4, b5, b6)[0])
         else:  # v0 = 0 (a right-hand side in the phi rows only)
             z0 = self._A.solve(bz)
-        phi = sla.lu_solve(self._T, z0[:N], check_finite=False)
+        phi = self._solve_T(z0[:N])
         if self.phi_only:  # phi and psi = b_psi + G phi exact, the other unknowns left 0
             out = np.zeros_like(b)
             out[:N] = phi
@@ -157,6 +166,10 @@ class CapacitanceCore:
         v, y, mu = self.K.implicit_state(u, b4, b5, b6)
         z = self._A.solve(bz - self._E @ v)
         return np.concatenate([z, u, v, y, mu], axis=0)
+
+    def _solve_T(self, rhs):
+        """``T^{-1} rhs`` by the LU factors of ``T``."""
+        return sla.lu_solve(self._T, rhs, check_finite=False)
 
     def det_sign(self) -> int:
         """Sign of the determinant of the core, ``(-1)^(p + q) sign(det A) sign(det T)``."""

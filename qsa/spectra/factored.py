@@ -75,7 +75,9 @@ import scipy.sparse.linalg as spla
 from qsa import geometry
 from qsa.curve import Curve
 from qsa.linalg import BlockSparse, Factorization, ReducedHessian, SparsePlusLowRank, factorize
+from qsa.spectra import capacitance
 from qsa.spectra.capacitance import CapacitanceCore, use_capacitance
+from qsa.spectra.capacitance_iterative import IterativeCapacitanceCore
 from qsa.spectra.refinement import BorderedSystem, Probe, column_norms, probe, refined_solve
 
 __all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
@@ -405,6 +407,30 @@ def _with_implicit_state(blocks, K, dgk, N):
     return out
 
 
+def local_blocks(op: FactoredNormalOperator, sigma: float):
+    """The ``3 x 3`` sparse blocks of the local system (module docstring), finite differences.
+
+    Parameters
+    ----------
+    op : FactoredNormalOperator
+    sigma : float
+
+    Returns
+    -------
+    list of list
+        Sparse blocks (``None`` for zero), ``N`` rows each.
+    """
+    N, w, gk, G, H = op.N, op.w, op.gk, op.G, op.H
+    Hkk, Hkg = H[:N, :N], H[:N, N:]
+    Hgk, Hgg = H[N:, :N], H[N:, N:]
+    I = sp.identity(N, format="csr")
+    dgk = sp.diags(gk)
+    A11 = -sigma * sp.diags(w) - dgk @ Hgg @ dgk
+    return [[A11, -(dgk @ Hgk), -G.T],
+            [-(Hkg @ dgk), -Hkk, I],
+            [-G, I, None]]
+
+
 class ShiftInvert:
     """``(W J - sigma W)^{-1}`` on the ``<.,.>``-complement of the deflated span, never forming J.
 
@@ -439,7 +465,10 @@ class ShiftInvert:
         How the core system is solved: ``"dense"`` (LAPACK, Fourier grids),
         ``"superlu"`` (sparse LU) or ``"capacitance"`` (a two-point energy with wide
         neighbourhoods on a finite-difference grid, eliminated onto an ``N x N``
-        capacitance matrix: :class:`~qsa.spectra.capacitance.CapacitanceCore`).
+        capacitance matrix: :class:`~qsa.spectra.capacitance.CapacitanceCore`), or
+        ``"gmres"`` (the same capacitance solved by deflated GMRES, never formed:
+        :class:`~qsa.spectra.capacitance_iterative.IterativeCapacitanceCore`; only when
+        ``qsa.spectra.capacitance.ITERATIVE`` is set, off by default).
 
     Examples
     --------
@@ -469,12 +498,8 @@ class ShiftInvert:
         Hkk, Hkg = H[:N, :N], H[:N, N:]
         Hgk, Hgg = H[N:, :N], H[N:, N:]
         if sparse:
-            I = sp.identity(N, format="csr")
             dgk = sp.diags(gk)
-            A11 = -sigma * sp.diags(w) - dgk @ Hgg @ dgk
-            blocks = [[A11, -(dgk @ Hgk), -G.T],
-                      [-(Hkg @ dgk), -Hkk, I],
-                      [-G, I, None]]
+            blocks = local_blocks(op, sigma)
             local = blocks
             if op.reduced is not None:
                 blocks = _with_implicit_state(blocks, op.reduced, dgk, N)
@@ -510,13 +535,18 @@ class ShiftInvert:
         self.core_solver = "dense" if not sparse else "superlu"
         if sparse and op.reduced is not None and use_capacitance(op.reduced, N):
             try:
-                cap = CapacitanceCore(local, op.reduced, dgk, N)
+                if capacitance.ITERATIVE:
+                    k = min(capacitance.DEFLATE, N // 4)
+                    cap = IterativeCapacitanceCore(local, op.reduced, dgk, N, deflate=k,
+                                                   arnoldi=min(capacitance.ARNOLDI, N // 2))
+                else:
+                    cap = CapacitanceCore(local, op.reduced, dgk, N)
             except np.linalg.LinAlgError:
                 pass  # a singular local block or capacitance: the whole system by SuperLU
             else:
                 self._lu = Factorization.from_solver(cap, B1, B2, D)
                 self._capacitance = cap
-                self.core_solver = "capacitance"
+                self.core_solver = "gmres" if capacitance.ITERATIVE else "capacitance"
         if self._lu is None:
             self._lu = factorize(core.tocsc() if sparse else core, B1, B2, D)
         self._free = None
