@@ -128,7 +128,11 @@ def cluster_tree(points, leaf_size=64) -> ClusterTree:
     if leaf_size < 1:
         raise ValueError(f"leaf_size must be a positive integer, got {leaf_size}")
     perm = np.arange(len(pts))
-    start, stop, lo, hi, children = [], [], [], [], []
+    start: list = []
+    stop: list = []
+    lo: list = []
+    hi: list = []
+    children: list = []
 
     def add(a, b):
         k = len(start)
@@ -499,7 +503,9 @@ def hierarchical_matrix(partition: BlockPartition, entries, *, symmetry=1, tol=1
     err2 = 0.0
     rng = np.random.default_rng(seed)
     ranks, n_fallback = [], 0
-    lefts, pairing, signs = [], [], []
+    lefts: list = []
+    pairing: list = []
+    signs: list = []
     for s, t in partition.far:
         I, J = tree.indices(s), tree.indices(t)
         m, n = I.size, J.size

@@ -535,6 +535,7 @@ class ShiftInvert:
         self.core_solver = "dense" if not sparse else "superlu"
         if sparse and op.reduced is not None and use_capacitance(op.reduced, N):
             try:
+                cap: CapacitanceCore | IterativeCapacitanceCore
                 if capacitance.ITERATIVE:
                     k = min(capacitance.DEFLATE, N // 4)
                     cap = IterativeCapacitanceCore(local, op.reduced, dgk, N, deflate=k,
