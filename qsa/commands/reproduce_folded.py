@@ -6,8 +6,10 @@ final state by Newton's method (relative residual <= 1e-9), computes the spectru
 of the linearization with its rigid kernel, counts the unstable modes, and starts
 the DAE from the polished state displaced along its slowest decaying mode: the
 measured decay rate should match that eigenvalue within 1%. Writes
-``folded.json`` and the figure ``folded_modes.png`` (the slowest modes on the
-curves) next to the folding figures.
+``folded.json`` (with the polished curves' sheet pairs against
+``d* = l* sqrt(a^2 + 1/2)``), ``folded.npz`` (the polished nodes, ``<name>_x`` and
+``<name>_y``) and the figure ``folded_modes.png`` (the slowest modes on the curves)
+next to the folding figures.
 """
 
 from __future__ import annotations
@@ -58,7 +60,10 @@ def run(args):
         summary["figures"] = sim.save_figures({"modes": folded_modes_figure(results)},
                                               args.out, "folded", args.plot)
     os.makedirs(args.out, exist_ok=True)
-    write_output(args.out, "folded", {}, summary)
+    arrays = {}
+    for r in results:                   # the polished nodes, to restart or inspect
+        arrays[f"{r.name}_x"], arrays[f"{r.name}_y"] = r.curve.positions()
+    write_output(args.out, "folded", arrays, summary)
     lines = []
     for s in summary["equilibria"]:
         line = (f"{s['name']}: polished to {s['relative_residual']:.2g} relative "
@@ -67,6 +72,10 @@ def run(args):
             slow = ", ".join(f"{v:.4g}" for v in s["slowest_eigenvalues"][:4])
             line += (f"; kernel {s['n_kernel']}, unstable {s['n_unstable']} "
                      f"({'stable' if s['stable'] else 'unstable'}); slowest {slow}")
+        sh = s["sheets"]
+        line += f"; {sh['n_pairs']} sheet pairs"
+        if sh["n_pairs"]:
+            line += f", separation {sh['separation']:.4g} (d* = {sh['target']:.4g})"
         if "rate" in s:
             rt = s["rate"]
             line += (f"; DAE rate {rt['measured_rate']:.5g} vs eigenvalue "

@@ -24,6 +24,7 @@ from qsa import Curve, Fourier
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.equilibria import polish
 from qsa.flows import CHA, solve_flow
+from qsa.flows.analysis import paired_sheets
 from qsa.spectra import spectrum
 from qsa.spectra.kernel import rigid_normal_basis
 
@@ -106,6 +107,15 @@ class FoldedEquilibrium:
         return idx[np.argsort(np.abs(sp.eigenvalues[idx]))][: self.n_slow]
 
     @property
+    def separation_target(self) -> float:
+        """The sheets' optimal separation ``d* = l* sqrt(a^2 + 1/2)``."""
+        return self.params["l_star"] * float(np.hypot(self.params["a"], np.sqrt(0.5)))
+
+    def sheets(self):
+        """The polished curve's paired sheets against ``d*``."""
+        return paired_sheets(*self.curve.positions(), self.separation_target)
+
+    @property
     def n_unstable(self) -> int | None:
         """Positive eigenvalues of ``J`` outside the kernel (``None`` without a spectrum)."""
         return None if self.spectrum is None else int(self.spectrum.n_unstable)
@@ -135,6 +145,7 @@ class FoldedEquilibrium:
                "n_newton": int(self.polished.n_newton),
                "length": float(self.curve.length()),
                "energy": float(self.energy.energy(self.curve)),
+               "sheets": self.sheets().to_dict(),
                "success": self.success}
         sp = self.spectrum
         if sp is not None:

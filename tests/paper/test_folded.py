@@ -119,3 +119,16 @@ def test_registration_recovers_a_parameter_shift_under_a_rigid_motion():
     f = np.cos(2 * t) + 0.5 * np.sin(7 * t)
     assert np.allclose(_shift(_shift(f, sigma), -sigma), f)
     assert np.allclose(_shift(f, 1.0), np.roll(f, -1))
+
+
+def test_sheet_pairs_of_the_polished_curve(fe):
+    """Sheet pairs: those of the polished nodes, against d* = l* sqrt(a^2 + 1/2)."""
+    from qsa.flows.analysis import paired_sheets
+
+    d_star = REF["l_star"] * np.sqrt(REF["a"] ** 2 + 0.5)
+    assert fe.separation_target == pytest.approx(d_star, rel=1e-15)
+    expected = paired_sheets(*fe.curve.positions(), d_star).to_dict()
+    s = json.loads(json.dumps(fe.summary()))
+    assert s["sheets"]["n_pairs"] == expected["n_pairs"]
+    assert s["sheets"]["target"] == pytest.approx(d_star, rel=1e-15)
+    assert s["sheets"]["separations"] == pytest.approx(expected["separations"], rel=1e-15)
