@@ -255,3 +255,37 @@ def test_low_rank_update_solves_the_updated_matrix(store):
                        b[:, 0], atol=1e-12)
     with pytest.raises(ValueError, match="shape"):
         LowRankUpdate(factorize(A), rows, C[:, :3], cols)
+
+
+def test_approximation_errors_follow_the_algebra():
+    """An approximated part's error estimate |l^T dK u| survives sums, multiples and products."""
+    H, _ = random_reduced(11)
+    H2, _ = random_reduced(12, m=4)
+    calls = []
+
+    def f(l, u):  # a stand-in estimate: |l^T u|, recording the domain it is given
+        calls.append(l.shape)
+        return np.abs(np.sum(l * u, axis=0))
+
+    H.approximations = (f,)
+    rng = np.random.default_rng(3)
+    psi = rng.standard_normal((7, 2))
+    l, u = H.left.T @ psi, H.right @ psi
+    assert np.allclose(H.approximation_error(l, u), np.abs(np.sum(l * u, axis=0)))
+    assert np.allclose(H2.approximation_error(l, u), 0.0)  # none: zero
+    # scaled: l = Lf^T psi carries the factor, the estimate is evaluated on it
+    H3 = 2.0 * H
+    assert H3.approximations == (f,)
+    # sparse products on either side keep K (and its domain)
+    D = sp.diags(rng.uniform(1, 2, 7))
+    assert (D @ H).approximations == (f,) and (H @ D).approximations == (f,)
+    # same scaling: one domain; different: the stacked domain, f sees its own part
+    same = H + ReducedHessian(H2.Luu, H2.Lyu, H2.Lyy, H2.cY, H2.cU, left=H.left)
+    assert same.approximations == (f,)
+    stacked = H2 + H
+    assert stacked.Luu.shape == (14, 14)
+    big = rng.standard_normal((14, 2))
+    calls.clear()
+    got = stacked.approximation_error(big, big)
+    assert calls == [(7, 2)]
+    assert np.allclose(got, np.abs(np.sum(big[7:] * big[7:], axis=0)))

@@ -213,6 +213,10 @@ class ReducedHessian:
         # triangular cY ("rows", for _solve_cY_many), CSR Lyu^T and cU^T ("transposes",
         # for implicit_state), entrywise absolute values ("abs", for rounding bounds)
         self._core = {}
+        # error estimates of approximated parts of K (a compressed two-point term): each
+        # f(l, u) estimates |l^T dK u| column by column for l, u in K's domain; sums,
+        # multiples and products with sparse matrices carry them (approximation_error)
+        self.approximations: tuple = ()
 
     # ----------------------------------------------------------------- shape
     @property
@@ -241,6 +245,19 @@ class ReducedHessian:
         out = ReducedHessian(**args)
         if not changes.keys() & {"Luu", "Lyu", "Lyy", "cY", "cU"}:
             out._core = self._core  # same core: share what is derived from it
+            out.approximations = self.approximations
+        return out
+
+    def approximation_error(self, l, u) -> np.ndarray:
+        """Estimate of ``|l^T dK u|`` from the approximated parts of ``K`` (zeros if none).
+
+        ``l``, ``u`` are in ``K``'s domain (``Lf^T psi`` and ``Rf psi`` of a form
+        ``psi^T H psi``), shape (p,) or (p, k); one estimate per column.
+        """
+        l = np.asarray(l, dtype=float)
+        out = np.zeros(l.shape[1:] if l.ndim > 1 else ())
+        for f in self.approximations:
+            out = out + f(l, np.asarray(u, dtype=float))
         return out
 
     def abs_core(self):
@@ -567,16 +584,23 @@ class ReducedHessian:
             if _same(self.left, other.left) and _same(self.right, other.right):
                 # one core on the same unknowns: stack the states, keep Lf and Rf (so a
                 # diagonal scaling stays diagonal and augmented() stays compact)
-                return ReducedHessian(self.Luu + other.Luu, sp.vstack([self.Lyu, other.Lyu]),
-                                      bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
-                                      sp.vstack([self.cU, other.cU]), self.left, self.right,
-                                      self.S + other.S, np.hstack([self.U, other.U]),
-                                      np.hstack([self.V, other.V]))
-            return ReducedHessian(bd(self.Luu, other.Luu), bd(self.Lyu, other.Lyu),
-                                  bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
-                                  bd(self.cU, other.cU), sp.hstack([self.left, other.left]),
-                                  sp.vstack([self.right, other.right]), self.S + other.S,
-                                  np.hstack([self.U, other.U]), np.hstack([self.V, other.V]))
+                out = ReducedHessian(self.Luu + other.Luu, sp.vstack([self.Lyu, other.Lyu]),
+                                     bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
+                                     sp.vstack([self.cU, other.cU]), self.left, self.right,
+                                     self.S + other.S, np.hstack([self.U, other.U]),
+                                     np.hstack([self.V, other.V]))
+                out.approximations = self.approximations + other.approximations
+                return out
+            out = ReducedHessian(bd(self.Luu, other.Luu), bd(self.Lyu, other.Lyu),
+                                 bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
+                                 bd(self.cU, other.cU), sp.hstack([self.left, other.left]),
+                                 sp.vstack([self.right, other.right]), self.S + other.S,
+                                 np.hstack([self.U, other.U]), np.hstack([self.V, other.V]))
+            p = self.Luu.shape[0]  # the stacked domain: self's first, then other's
+            out.approximations = (
+                tuple(_restricted(f, slice(0, p)) for f in self.approximations)
+                + tuple(_restricted(f, slice(p, None)) for f in other.approximations))
+            return out
         if isinstance(other, SparsePlusLowRank):
             return self._with(S=self.S + other.S, U=np.hstack([self.U, other.U]),
                               V=np.hstack([self.V, other.V]))
@@ -591,7 +615,9 @@ class ReducedHessian:
     def __mul__(self, c):
         if not np.isscalar(c):
             return NotImplemented
-        return self._with(left=c * self.left, S=c * self.S, U=c * self.U)
+        out = self._with(left=c * self.left, S=c * self.S, U=c * self.U)
+        out.approximations = self.approximations  # l = Lf^T psi carries the factor c
+        return out
 
     __rmul__ = __mul__
 
@@ -607,6 +633,11 @@ class ReducedHessian:
     def __repr__(self):
         return (f"ReducedHessian(shape={self.shape}, state={self.cY.shape[0]}, nnz={self.nnz}, "
                 f"rank={self.U.shape[1]})")
+
+
+def _restricted(f, part):
+    """``f`` of a stacked domain's part ``part`` (a slice of the rows of ``l`` and ``u``)."""
+    return lambda l, u: f(l[part], u[part])
 
 
 class BlockSparse:

@@ -69,9 +69,17 @@ def use_capacitance(K, N) -> bool:
     Returns
     -------
     bool
+        True when ``Lyy`` averages at least ``WIDE_ROW`` entries per row, ``N`` is at
+        least ``MIN_NODES`` and more than ``N`` of its rows are wide.
     """
     q = K.cY.shape[0]
-    return bool(q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_ROW * q)
+    if not (q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_ROW * q):
+        return False
+    # the wide rows confined to a block smaller than N (a compressed two-point term: its
+    # coarse state, qsa.energies.adhesion_interp): the sparse LU factors that block as a
+    # dense one, cheaper than forming and factoring the N x N capacitance
+    wide = int(np.count_nonzero(np.diff(K.Lyy.indptr) > WIDE_ROW))
+    return wide > N
 
 
 class CapacitanceCore:

@@ -331,9 +331,13 @@ class FactoredNormalOperator:
         M1phi = np.concatenate([abs(self.G) @ aphi, np.abs(self.gk[:, None] * phi)], axis=0)
         total = np.sum(apsi * (abs(self.H) @ apsi), axis=0) + 2.0 * np.sum(np.abs(chi) * M1phi,
                                                                           axis=0)
+        approx = 0.0
         if self.reduced is not None:
             total = total + _reduced_rounding(self.reduced, psi)
-        return _EPS * total
+            K = self.reduced
+            # a compressed two-point term: its own error estimate, not a rounding
+            approx = K.approximation_error(K.left.T @ psi, K.right @ psi)
+        return _EPS * total + approx
 
 
 def _reduced_rounding(K, psi):
@@ -366,7 +370,9 @@ class EigenErrors:
     residual : ndarray, shape (k,)
         From the residual of the inverse problem and the solve's forward error.
     rounding : ndarray, shape (k,)
-        From rounding the factors' entries (three standard deviations).
+        From rounding the factors' entries (three standard deviations), plus the
+        estimated error of approximated parts of the Hessian (a compressed two-point
+        term, :meth:`~qsa.linalg.ReducedHessian.approximation_error`).
     total : ndarray, shape (k,)
         ``residual + rounding + eps |lambda|``.
 

@@ -7,7 +7,7 @@ import scipy.sparse.linalg as spla
 
 from qsa import Curve, FiniteDifference
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
-from qsa.linalg import factorize
+from qsa.linalg import ReducedHessian, factorize
 from qsa.spectra import (
     FactoredNormalOperator,
     certified_eigenpairs,
@@ -166,3 +166,20 @@ def test_ritz_pairs_errors_equal_those_of_a_second_solve(forced):
     assert np.allclose(kv, si.sigma + 1.0 / nu, rtol=1e-10, atol=0)
     assert kvec.shape == (c.N, R.shape[0]) and np.all(kerr > 0)
     assert np.array_equal(op.ritz_values(R), op.ritz(R)[0])
+
+
+def test_wide_rows_confined_to_a_small_block_stay_with_the_sparse_lu():
+    """A dense trailing block of fewer than N state rows (a compressed pair term's coarse
+    state) is factored by SuperLU; wide rows over the whole state take the capacitance."""
+    N, q, r = 500, 1500, 480
+    rng = np.random.default_rng(0)
+    dense = rng.standard_normal((r, r))
+    Lyy = sp.block_diag([sp.identity(q - r), sp.csr_matrix(dense + dense.T)], format="csr")
+    K = ReducedHessian(sp.identity(2 * N), sp.csr_matrix((q, 2 * N)), Lyy, sp.identity(q),
+                       sp.csr_matrix((q, 2 * N)))
+    assert K.Lyy.nnz >= cap.WIDE_ROW * q  # wide on average
+    assert not cap.use_capacitance(K, N)
+    wide = sp.csr_matrix(sp.random(q, q, density=0.2, random_state=1))
+    K2 = ReducedHessian(sp.identity(2 * N), sp.csr_matrix((q, 2 * N)), wide + wide.T,
+                        sp.identity(q), sp.csr_matrix((q, 2 * N)))
+    assert cap.use_capacitance(K2, N)
