@@ -27,9 +27,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from qsa.curve import Curve
-from qsa.energies.adhesion import Adhesion, pair_list
+from qsa.energies.adhesion import Adhesion, adhesion_pairs, pair_list
 
 __all__ = ["TwoPointInvariants", "adhesion_invariants", "two_point_terms"]
+
+# pairs per chunk of the level-set sums
+_CHUNK = 1 << 20
 
 
 def two_point_terms(energy) -> tuple:
@@ -165,32 +168,40 @@ def adhesion_invariants(energy, curve: Curve, n_levels=32) -> TwoPointInvariants
     reach = max(t.kernel.cutoff_distance() for t in terms)
     diameter = np.hypot(np.ptp(x), np.ptp(y))
     rmax = min(reach, diameter)
-    i, j = pair_list(x, y, rmax)
-    dx, dy = x[i] - x[j], y[i] - y[j]
+    if rmax == reach and len(terms) == 1 and terms[0].method == "neighbours":
+        i, j = adhesion_pairs(terms[0].kernel, x, y)  # the energy's own (cached) list
+    else:
+        i, j = pair_list(x, y, rmax)
     radii = np.linspace(0.0, rmax, n_levels + 1)
-    level = np.clip(np.searchsorted(radii, np.hypot(dx, dy), side="left") - 1, 0, n_levels - 1)
-    ww = w[i] * w[j]
+    nx, ny, tx, ty = n[0], n[1], tau[0], tau[1]
+    n_g, t_g = nx * x + ny * y, tx * x + ty * y
 
-    def ordered(f):
-        """``w_i w_j (f(i, j) + f(j, i))`` summed per level, and the sums of ``|.|``."""
-        a, b = f(i, j, 1.0), f(j, i, -1.0)
-        return (np.bincount(level, ww * (a + b), n_levels),
-                np.bincount(level, ww * (np.abs(a) + np.abs(b)), n_levels))
-
-    def rot(p, q, _sign):
-        n_gp = n[0][p] * x[p] + n[1][p] * y[p]
-        n_gq = n[0][p] * x[q] + n[1][p] * y[q]
-        t_gp = tau[0][p] * x[p] + tau[1][p] * y[p]
-        t_gq = tau[0][p] * x[q] + tau[1][p] * y[q]
-        return n_gp * t_gq - n_gq * t_gp
+    def rot(p, q, d):
+        # (n_p . gamma_p)(tau_p . gamma_q) - (n_p . gamma_q)(tau_p . gamma_p)
+        return n_g[p] * (tx[p] * x[q] + ty[p] * y[q]) - (nx[p] * x[q] + ny[p] * y[q]) * t_g[p]
 
     def trans(e):
-        def f(p, q, sign):
-            ddx, ddy = sign * dx, sign * dy       # d = gamma_p - gamma_q
-            nd = n[0][p] * ddx + n[1][p] * ddy
-            td = tau[0][p] * ddx + tau[1][p] * ddy
+        def f(p, q, d):  # d = gamma_p - gamma_q
+            nd = nx[p] * d[0] + ny[p] * d[1]
+            td = tx[p] * d[0] + ty[p] * d[1]
             return nd * n[e][p] + td * tau[e][p]
         return f
+
+    forms = (rot, trans(0), trans(1))
+    value = np.zeros((3, n_levels))
+    scale = np.zeros((3, n_levels))
+    # ordered pairs (i, j) and (j, i), i < j, summed per distance level: in chunks of
+    # pairs, so the temporaries stay small however many pairs interact
+    for start in range(0, i.size, _CHUNK):
+        a, b = i[start:start + _CHUNK], j[start:start + _CHUNK]
+        d = (x[a] - x[b], y[a] - y[b])
+        level = np.clip(np.searchsorted(radii, np.hypot(*d), side="left") - 1, 0,
+                        n_levels - 1)
+        ww = w[a] * w[b]
+        for k, f in enumerate(forms):
+            fa, fb = f(a, b, d), f(b, a, (-d[0], -d[1]))
+            value[k] += np.bincount(level, ww * (fa + fb), n_levels)
+            scale[k] += np.bincount(level, ww * (np.abs(fa) + np.abs(fb)), n_levels)
 
     def rel(pair):
         value, scale = pair
@@ -199,8 +210,8 @@ def adhesion_invariants(energy, curve: Curve, n_levels=32) -> TwoPointInvariants
         out[filled] = np.abs(value[filled]) / scale[filled]
         return out
 
-    rotation_levels = rel(ordered(rot))
-    translation_levels = np.column_stack([rel(ordered(trans(e))) for e in (0, 1)])
+    rotation_levels = rel((value[0], scale[0]))
+    translation_levels = np.column_stack([rel((value[k], scale[k])) for k in (1, 2)])
     both = np.concatenate([rotation_levels, translation_levels.ravel()])
     level_set_max = float(np.nanmax(both)) if np.isfinite(both).any() else 0.0
     return TwoPointInvariants(translation_force, rotation_force, translation_curvature,
