@@ -359,3 +359,26 @@ def test_neighbour_list_at_the_last_positions_is_reused_as_computed():
         assert np.array_equal(i, i0) and np.array_equal(j, j0)
         i[:] = 0  # the caller's copy: the next call is unaffected
         assert np.array_equal(adhesion_pairs(k, x, y)[0], i0)
+
+
+def test_neighbour_lists_of_moved_nodes_equal_fresh_queries():
+    """A curve moved by less than the kept margin gets its list by filtering the kept wider
+    one: the same pairs in the same order as a fresh k-d tree query; a larger move queries."""
+    from qsa.energies import adhesion as ad
+
+    k = ad.AdhesionKernel(A0=1.0, l_star=0.05, a=1.0)
+    t = 2 * np.pi * np.arange(600) / 600
+    x, y = np.cos(t) * (1 + 0.3 * np.cos(5 * t)), np.sin(t) * (1 + 0.3 * np.cos(5 * t))
+    cutoff = k.cutoff_distance()
+    rng = np.random.default_rng(0)
+    ad._SUPERSETS.clear()
+    base = ad.adhesion_pairs(k, x, y)
+    assert len(ad._SUPERSETS) == 1
+    for scale in (1e-12, 1e-6, 0.2 * ad._MARGIN * cutoff, 0.05):
+        xm, ym = x + scale * rng.standard_normal(600), y + scale * rng.standard_normal(600)
+        got = ad.adhesion_pairs(k, xm, ym)
+        fresh = ad.pair_list(xm, ym, cutoff)
+        assert np.array_equal(got[0], fresh[0]) and np.array_equal(got[1], fresh[1])
+    assert len(ad._SUPERSETS) == 2  # the large move made (and kept) a list of its own
+    again = ad.adhesion_pairs(k, x + 1e-13, y)
+    assert np.array_equal(again[0], base[0]) and np.array_equal(again[1], base[1])
