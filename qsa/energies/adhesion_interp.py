@@ -10,10 +10,13 @@ pair functions ``G(r, c) = g(X_r - X_c)`` (:mod:`qsa.energies.adhesion_far`) ::
 ``W = diag(w)``, ``w = dsigma``. The kernel ``A(l)`` is entire in ``l = |d|^2``, so
 every ``g`` is analytic in ``d`` (also at ``d = 0``) and ``G(r, c)`` is a smooth
 function of the two curve parameters ``s_r, s_c`` (``s_i = i / N``). Cut the parameter
-circle into panels (arc length at most ``panel_length * l*`` and, at tight turns,
-``curvature_length / |kappa|``) and interpolate on each side by Lagrange polynomials
-through ``degree`` fine nodes of each panel (those nearest to its Chebyshev points;
-a panel with fewer than ``2 degree`` fine nodes keeps all of them) ::
+circle into panels and interpolate on each side by Lagrange polynomials through ``p``
+fine nodes of each panel (those nearest to its Chebyshev points; a panel with at most
+``p`` fine nodes keeps all of them). Panels start at arc length ``panel_length l*``;
+each takes the lowest degree ``p`` of ``degrees`` at which the six functions
+``g(X(s) - y)`` interpolate to ``tol`` (relative to their largest values) for probes
+``y`` on and beside the panel (normal offsets up to ``l*``), and is bisected if none
+does, so tight turns get short panels ::
 
     G ~ Pi Ghat Pi^T,   Pi (N x M) sparse,  Ghat[a, b] = g(X_{i(a)} - X_{i(b)}),
 
@@ -25,7 +28,8 @@ Then ::
 
 ``C`` symmetric (``Gx, Gy`` antisymmetric), with the blocks of panel pairs whose
 bounding circles are farther apart than the neighbour list's cutoff dropped (``K`` has
-no pair there), and ``D`` block diagonal (one 3 x 3 block per node): the exact
+no pair there; within the kept blocks the coarse pairs beyond the cutoff at
+``tol / 100`` are dropped too), and ``D`` block diagonal (one 3 x 3 block per node): the exact
 diagonal blocks of ``K`` (row sums over the neighbour list, streamed panel by panel)
 minus those of ``B C B^T``. ``M`` depends on the curve's length over ``l*`` and its
 curvature, not on ``N``; storage is O(N + nnz(C)).
@@ -44,6 +48,7 @@ The reduced Hessian of ``local + S^T (B C B^T + D) S``
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from dataclasses import dataclass, replace
@@ -56,7 +61,10 @@ from qsa.energies.adhesion_hessian import adjoint_fields, local_reduced_parts
 from qsa.linalg import ReducedHessian
 
 __all__ = ["InterpolatedPairHessian", "interpolated_pair_hessian",
-           "interpolated_reduced_hessian"]
+           "interpolated_reduced_hessian", "DEGREES"]
+
+#: Default candidate degrees of :func:`interpolated_pair_hessian`.
+DEGREES = (8, 10, 12, 14, 16, 18, 20, 22, 24, 28, 32)
 
 _NAMES = ("w", "x", "y", "xx", "xy", "yy")
 
@@ -70,25 +78,29 @@ def _pair_values(kernel, dx, dy):
 
 
 # ------------------------------------------------------------------ panels
-def _chosen(f0, f1, cheb):
-    """The interpolation nodes of a panel with fine nodes ``f0 .. f1 - 1``."""
-    fine = np.arange(f0, f1)
-    if fine.size < 2 * cheb.size:  # too few to pick near-Chebyshev points from: keep all
-        return fine
-    return np.unique(np.clip(np.rint(f0 - 0.5 + cheb * (f1 - f0)), f0, f1 - 1).astype(np.int64))
+def _chebyshev(degree):
+    """Chebyshev points of the first kind on ``[0, 1]``."""
+    return 0.5 * (1.0 - np.cos((2 * np.arange(degree) + 1) * np.pi / (2 * degree)))
 
 
-def _fine_ptr(N, b):
-    """First fine node of each panel ``[b_k, b_k+1)`` (``s_i = i / N``), empty panels dropped."""
-    ptr = np.unique(np.clip(np.ceil(b * N - 1e-9).astype(np.int64), 0, N))
-    return np.unique(np.concatenate([[0], ptr, [N]]))
+def _chosen(f0, f1, degree):
+    """The interpolation nodes of a panel with fine nodes ``f0 .. f1 - 1``: all of them if
+    there are at most ``degree``, else the ``degree`` nearest to its Chebyshev points
+    (made distinct, in order)."""
+    n = f1 - f0
+    if n <= degree:
+        return np.arange(f0, f1)
+    idx = np.rint(_chebyshev(degree) * n - 0.5).astype(np.int64)
+    k = np.arange(degree)
+    # idx - k nondecreasing in [0, n - degree]: idx strictly increasing in [0, n - 1]
+    return f0 + np.maximum.accumulate(np.clip(idx - k, 0, n - degree)) + k
 
 
-def _panel_error(kernel, x, y, nx, ny, f0, f1, cheb, scale):
+def _panel_error(kernel, x, y, nx, ny, f0, f1, degree, scale):
     """Largest interpolation error of the six pair functions on one panel, relative to
     their largest values ``scale``, at probes on and beside the panel's nodes."""
     fine = np.arange(f0, f1)
-    ch = _chosen(f0, f1, cheb)
+    ch = _chosen(f0, f1, degree)
     if ch.size == fine.size:
         return 0.0
     L = _barycentric(ch.astype(float), fine.astype(float))
@@ -100,14 +112,17 @@ def _panel_error(kernel, x, y, nx, ny, f0, f1, cheb, scale):
     return max(float(np.max(np.abs(L @ G[n][pos] - G[n]))) / scale[n] for n in _NAMES)
 
 
-def _breakpoints(kernel, c: Curve, degree, panel_length, tol, max_splits=40):
-    """Panel ends ``0 = b_0 < ... < b_n = 1`` in ``s``: arc length ``panel_length l*`` to
-    start with, then panels whose :func:`_panel_error` exceeds ``tol`` bisected."""
+def _panels(kernel, c: Curve, degrees, panel_length, tol):
+    """Panels (first fine node of each, ``fine_ptr``) and their degrees.
+
+    Arc length ``panel_length l*`` to start with; each panel takes the lowest of
+    ``degrees`` whose :func:`_panel_error` is at most ``tol``, or is bisected if none is
+    (a panel too short to pick points from keeps all its nodes and passes).
+    """
     N = c.N
     x, y = c.positions()
     th = c.theta()
     nx, ny = -np.sin(th), np.cos(th)
-    cheb = 0.5 * (1.0 - np.cos((2 * np.arange(degree) + 1) * np.pi / (2 * degree)))
     r = np.linspace(0.0, kernel.cutoff_distance(1e-16), 2001)
     G = _pair_values(kernel, r, 0.0 * r)
     G["y"], G["yy"], G["xy"] = G["x"], G["xx"], 0.5 * G["xx"]
@@ -115,19 +130,21 @@ def _breakpoints(kernel, c: Curve, degree, panel_length, tol, max_splits=40):
     Q = np.concatenate([[0.0], np.cumsum(c.g) / N])
     n = max(int(math.ceil(Q[-1] / (panel_length * kernel.l_star) - 1e-9)), 1)
     b = np.interp(np.linspace(0.0, Q[-1], n + 1), Q, np.arange(N + 1) / N)
-    ok = np.zeros(n, dtype=bool)  # panels already checked
-    for _ in range(max_splits):
-        ptr = np.ceil(b * N - 1e-9).astype(np.int64)
-        bad = [k for k in range(b.size - 1) if not ok[k] and _panel_error(
-            kernel, x, y, nx, ny, ptr[k], ptr[k + 1], cheb, scale) > tol]
-        if not bad:
-            break
-        mid = 0.5 * (b[bad] + b[np.asarray(bad) + 1])
-        ok = np.ones(b.size - 1, dtype=bool)
-        ok[bad] = False
-        b = np.insert(b, np.asarray(bad) + 1, mid)
-        ok = np.insert(ok, np.asarray(bad) + 1, False)
-    return b
+    todo = [(int(f0), int(f1)) for f0, f1 in itertools.pairwise(
+        np.unique(np.concatenate([[0], np.ceil(b * N - 1e-9).astype(np.int64), [N]])))]
+    done = []
+    while todo:
+        f0, f1 = todo.pop()
+        for p in degrees:
+            if _panel_error(kernel, x, y, nx, ny, f0, f1, p, scale) <= tol:
+                done.append((f0, f1, p))
+                break
+        else:
+            m = (f0 + f1) // 2
+            todo += [(f0, m), (m, f1)]
+    done.sort()
+    fine_ptr = np.array([d[0] for d in done] + [N])
+    return fine_ptr, np.array([d[2] for d in done])
 
 
 def _barycentric(nodes, points):
@@ -148,19 +165,17 @@ def _barycentric(nodes, points):
     return L
 
 
-def _interpolation(N, b, degree):
-    """``Pi`` (N x M, CSR), the fine node of each coarse point and the panel ranges.
+def _interpolation(N, fine_ptr, degrees):
+    """``Pi`` (N x M, CSR), the fine node of each coarse point and the panels' coarse ranges.
 
-    Returns ``Pi, nodes, fine_ptr, coarse_ptr``: panel ``k`` holds fine nodes
+    Returns ``Pi, nodes, coarse_ptr``: panel ``k`` holds fine nodes
     ``fine_ptr[k]:fine_ptr[k+1]`` and coarse points ``coarse_ptr[k]:coarse_ptr[k+1]``.
     """
-    fine_ptr = _fine_ptr(N, b)
-    cheb = 0.5 * (1.0 - np.cos((2 * np.arange(degree) + 1) * np.pi / (2 * degree)))
     rows, cols, vals, nodes, coarse_ptr = [], [], [], [], [0]
     for k in range(fine_ptr.size - 1):
         f0, f1 = int(fine_ptr[k]), int(fine_ptr[k + 1])
         fine = np.arange(f0, f1)
-        chosen = _chosen(f0, f1, cheb)
+        chosen = _chosen(f0, f1, degrees[k])
         L = _barycentric(chosen.astype(float), fine.astype(float))
         m0 = coarse_ptr[-1]
         rows.append(np.repeat(fine, chosen.size))
@@ -172,7 +187,7 @@ def _interpolation(N, b, degree):
     Pi = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                        shape=(N, M))
     Pi.eliminate_zeros()
-    return Pi, np.concatenate(nodes), fine_ptr, np.asarray(coarse_ptr)
+    return Pi, np.concatenate(nodes), np.asarray(coarse_ptr)
 
 
 def _panel_pairs(x, y, fine_ptr, cutoff):
@@ -196,37 +211,47 @@ def _signed_blocks(G):
                      np.stack([-G["x"], -G["y"], G["w"]])])
 
 
-def _coarse_matrix(kernel, xc, yc, coarse_ptr, P, Q):
-    """``C`` (3M x 3M, CSR, exactly symmetric) on the panel pairs ``(P, Q)`` (both orders).
+def _coarse_matrix(kernel, xc, yc, coarse_ptr, P, Q, drop):
+    """``C`` (3M x 3M, CSR, exactly symmetric) on the panel pairs ``(P, Q)`` (both orders),
+    without the coarse pairs farther apart than ``drop``.
 
-    Assembled in place row panel by row panel: every row of a panel has the same columns.
+    Assembled in place row panel by row panel (a first pass counts the entries).
     """
     M = xc.size
     n = coarse_ptr.size - 1
-    sizes = np.diff(coarse_ptr)
     order = np.lexsort((Q, P))
     P, Q = P[order], Q[order]
     starts = np.searchsorted(P, np.arange(n + 1))
-    width = np.bincount(P, sizes[Q], n).astype(np.int64)  # columns of one block row of panel P
-    row_nnz = np.repeat(3 * width, sizes)  # per coarse point, all three blocks
-    indptr = np.concatenate([[0], np.cumsum(np.tile(row_nnz, 3))])
+
+    def panel(p):
+        r = np.arange(coarse_ptr[p], coarse_ptr[p + 1])
+        cols = np.concatenate([np.arange(coarse_ptr[q], coarse_ptr[q + 1])
+                               for q in Q[starts[p]:starts[p + 1]]])
+        dx, dy = xc[r, None] - xc[cols], yc[r, None] - yc[cols]
+        return r, cols, dx, dy, dx * dx + dy * dy <= drop * drop
+
+    counts = np.zeros(M, dtype=np.int64)
+    for p in range(n):
+        r, _, _, _, keep = panel(p)
+        counts[r] = 3 * keep.sum(axis=1)
+    indptr = np.concatenate([[0], np.cumsum(np.tile(counts, 3))])
     itype = np.int32 if indptr[-1] < 2**31 and 3 * M < 2**31 else np.int64
     data = np.empty(indptr[-1])
     indices = np.empty(indptr[-1], dtype=itype)
     for p in range(n):
-        r = np.arange(coarse_ptr[p], coarse_ptr[p + 1])
-        cols = np.concatenate([np.arange(coarse_ptr[q], coarse_ptr[q + 1])
-                               for q in Q[starts[p]:starts[p + 1]]])
-        V = _signed_blocks(_pair_values(kernel, xc[r, None] - xc[cols], yc[r, None] - yc[cols]))
-        allcols = np.concatenate([cols, M + cols, 2 * M + cols]).astype(itype)
+        r, cols, dx, dy, keep = panel(p)
+        V = _signed_blocks(_pair_values(kernel, dx, dy))  # (a, b, row, column)
+        keep3 = np.broadcast_to(keep[:, None, :], (r.size, 3, cols.size))
+        allcols = np.broadcast_to(np.stack([cols, M + cols, 2 * M + cols]), keep3.shape)
+        idx = allcols[keep3].astype(itype)  # row-major (row, block b, column): CSR order
         for a in range(3):
             k0, k1 = indptr[a * M + r[0]], indptr[a * M + r[-1] + 1]
-            data[k0:k1] = V[a].transpose(1, 0, 2).reshape(-1)  # (row, block b, column)
-            indices[k0:k1] = np.tile(allcols, r.size)
+            data[k0:k1] = V[a].transpose(1, 0, 2)[keep3]
+            indices[k0:k1] = idx
     return sp.csr_matrix((data, indices, indptr.astype(itype)), shape=(3 * M, 3 * M))
 
 
-def _diagonal_blocks(kernel, Pi, x, y, w, nodes, fine_ptr, coarse_ptr):
+def _diagonal_blocks(kernel, Pi, x, y, w, nodes, fine_ptr, coarse_ptr, drop):
     """The node-diagonal 3 x 3 blocks of ``B C B^T``, shape (3, 3, N): each node's row of
     ``Pi`` lives in its own panel, so only the panel's own block of ``C`` enters."""
     N = x.size
@@ -235,7 +260,8 @@ def _diagonal_blocks(kernel, Pi, x, y, w, nodes, fine_ptr, coarse_ptr):
         f = slice(fine_ptr[k], fine_ptr[k + 1])
         m = nodes[coarse_ptr[k]:coarse_ptr[k + 1]]
         L = Pi[f, coarse_ptr[k]:coarse_ptr[k + 1]].toarray()
-        V = _signed_blocks(_pair_values(kernel, x[m, None] - x[m], y[m, None] - y[m]))
+        dx, dy = x[m, None] - x[m], y[m, None] - y[m]
+        V = _signed_blocks(_pair_values(kernel, dx, dy)) * (dx * dx + dy * dy <= drop * drop)
         out[:, :, f] = np.einsum("ij,abjk,ik->abi", L, V, L)
     sc = np.stack([w, w, np.ones(N)])
     return out * sc[:, None, :] * sc[None, :, :]
@@ -320,8 +346,8 @@ class InterpolatedPairHessian:
         The requested relative tolerance.
     error_estimate : float
         The largest sampled relative row error (module docstring).
-    degree : int
-        Interpolation nodes per panel.
+    degrees : ndarray of int, shape (n_panels,)
+        Each panel's interpolation degree (nodes; all of its nodes if it has no more).
     """
 
     Pi: sp.csr_matrix
@@ -336,7 +362,7 @@ class InterpolatedPairHessian:
     A0: float
     tol: float
     error_estimate: float
-    degree: int
+    degrees: np.ndarray
 
     @property
     def N(self) -> int:
@@ -406,15 +432,15 @@ class InterpolatedPairHessian:
         return self.rows(np.arange(3 * self.N))
 
 
-def _build(kernel, c, cutoff, drop, degree, panel_length, panel_tol, sample):
+def _build(kernel, c, cutoff, drop, degrees, panel_length, panel_tol, sample):
     x, y = c.positions()
     w = c.dsigma
     N = c.N
-    b = _breakpoints(kernel, c, degree, panel_length, panel_tol)
-    Pi, nodes, fine_ptr, coarse_ptr = _interpolation(N, b, degree)
+    fine_ptr, degree = _panels(kernel, c, degrees, panel_length, panel_tol)
+    Pi, nodes, coarse_ptr = _interpolation(N, fine_ptr, degree)
     P, Q = _panel_pairs(x, y, fine_ptr, cutoff)
     near = _panel_pairs(x, y, fine_ptr, drop) if drop < cutoff else (P, Q)
-    C = _coarse_matrix(kernel, x[nodes], y[nodes], coarse_ptr, *near)
+    C = _coarse_matrix(kernel, x[nodes], y[nodes], coarse_ptr, *near, drop)
     sums = _row_sums(kernel, x, y, w, fine_ptr, P, Q, cutoff)
     # exact diagonal blocks of K, order (x, y, w) x (x, y, w)
     exact = np.empty((3, 3, N))
@@ -422,7 +448,7 @@ def _build(kernel, c, cutoff, drop, degree, panel_length, panel_tol, sample):
     exact[0, 2], exact[1, 2] = sums[3], sums[4]
     exact[2, 2] = 2.0 * kernel.A0
     exact[1, 0], exact[2, 0], exact[2, 1] = exact[0, 1], exact[0, 2], exact[1, 2]
-    exact -= _diagonal_blocks(kernel, Pi, x, y, w, nodes, fine_ptr, coarse_ptr)
+    exact -= _diagonal_blocks(kernel, Pi, x, y, w, nodes, fine_ptr, coarse_ptr, drop)
     n = np.arange(N)
     rr = np.concatenate([a * N + n for a in range(3) for _ in range(3)])
     cc = np.concatenate([bb * N + n for _ in range(3) for bb in range(3)])
@@ -430,7 +456,7 @@ def _build(kernel, c, cutoff, drop, degree, panel_length, panel_tol, sample):
     F = w[:, None] * sums[3:5].T
     Bw = 2.0 * kernel.A0 * w + sums[5]
     ip = InterpolatedPairHessian(Pi, nodes, fine_ptr, coarse_ptr, w, C, D, F, Bw,
-                                 float(kernel.A0), 0.0, 0.0, int(degree))
+                                 float(kernel.A0), 0.0, 0.0, degree)
     # a posteriori: one random node per panel, at most `sample`
     rng = np.random.default_rng(0)
     picks = fine_ptr[:-1] + (rng.random(fine_ptr.size - 1) * np.diff(fine_ptr)).astype(int)
@@ -447,7 +473,8 @@ def _build(kernel, c, cutoff, drop, degree, panel_length, panel_tol, sample):
     return ip, err
 
 
-def interpolated_pair_hessian(kernel, c: Curve, *, tol=1e-10, degree=16, panel_length=1.0,
+def interpolated_pair_hessian(kernel, c: Curve, *, tol=1e-10, degrees=DEGREES,
+                              panel_length=2.0,
                               rel=1e-16, samples=256, attempts=3) -> InterpolatedPairHessian:
     """The adhesion pair Hessian ``K`` of ``c`` compressed by panel interpolation.
 
@@ -458,15 +485,15 @@ def interpolated_pair_hessian(kernel, c: Curve, *, tol=1e-10, degree=16, panel_l
         Its nodes ``X_i`` are the interpolated function's samples at ``s_i = i / N``.
     tol : float
         Target of the sampled relative row error (module docstring).
-    degree : int
-        Interpolation nodes per panel.
+    degrees : sequence of int
+        Candidate interpolation degrees (nodes per panel), tried in increasing order.
     panel_length : float
-        Initial panel arc length in units of ``l*`` (panels are then bisected until the
-        six pair functions interpolate to ``tol`` of their largest values at probes
-        on and beside the panel).
+        Initial panel arc length in units of ``l*``. Each panel takes the lowest degree at
+        which the six pair functions interpolate to ``tol`` of their largest values at
+        probes on and beside the panel, and is bisected if none does.
     rel : float
         The neighbour list's cutoff threshold (:meth:`AdhesionKernel.cutoff_distance`).
-        Blocks of ``C`` are kept for panels within the cutoff at ``min(rel, tol / 100)``.
+        ``C`` keeps the coarse pairs within the cutoff at ``max(rel, tol / 100)``.
     samples : int
         Nodes whose rows are checked exactly (one per panel, at most this many).
     attempts : int
@@ -495,25 +522,25 @@ def interpolated_pair_hessian(kernel, c: Curve, *, tol=1e-10, degree=16, panel_l
     tol = float(tol)
     if not (0.0 < tol < 1.0):
         raise ValueError(f"tol must lie in (0, 1), got {tol!r}")
-    degree = int(degree)
-    if degree < 2:
-        raise ValueError(f"degree must be at least 2, got {degree}")
+    degrees = sorted({int(p) for p in np.atleast_1d(degrees)})
+    if not degrees or degrees[0] < 2:
+        raise ValueError(f"degrees must be integers >= 2, got {degrees}")
     panel_length = float(panel_length)
     if panel_length <= 0.0:
         raise ValueError(f"panel_length must be positive, got {panel_length}")
     if c.N < 2:
         raise ValueError(f"c must have at least 2 nodes, got {c.N}")
     cutoff = kernel.cutoff_distance(rel)
-    drop = kernel.cutoff_distance(min(rel, 0.01 * tol))
+    drop = kernel.cutoff_distance(max(rel, 0.01 * tol))
     attempts = max(int(attempts), 1)
     for attempt in range(attempts):
-        ip, err = _build(kernel, c, cutoff, drop, degree, panel_length * 0.7**attempt,
+        ip, err = _build(kernel, c, cutoff, drop, degrees, panel_length * 0.7**attempt,
                          tol * 0.1**attempt, int(samples))
         if err <= tol:
             break
     else:
         warnings.warn(f"interpolated_pair_hessian: sampled relative error {err:.2e} above "
-                      f"tol = {tol:.1e} after {attempts} builds; raise degree or lower "
+                      f"tol = {tol:.1e} after {attempts} builds; raise degrees or lower "
                       f"panel_length", RuntimeWarning, stacklevel=2)
     return replace(ip, tol=tol, error_estimate=err)
 

@@ -32,9 +32,9 @@ _smooth = lambda N: Curve.polar(lambda t: 1 + 0.2 * np.cos(5 * t), FiniteDiffere
 CASES = {
     "smooth, l* = 0.5": (_smooth, AdhesionKernel(10.0, 0.5, 1.0), 1600, {}, True),
     "smooth, l* = 0.3": (_smooth, AdhesionKernel(10.0, 0.3, 1.0), 1200,
-                         {"degree": 10, "tol": 1e-8}, True),
+                         {"degrees": 10, "tol": 1e-8}, True),
     "folds, l* = 0.2": (_folded, AdhesionKernel(40.0, 0.2, 1.0), 600,
-                        {"degree": 8, "tol": 1e-7}, False),
+                        {"degrees": 8, "tol": 1e-7}, False),
 }
 
 
@@ -113,8 +113,8 @@ def test_bad_arguments():
     c = Curve.circle(1.0, FiniteDifference(64))
     with pytest.raises(ValueError, match="tol"):
         interpolated_pair_hessian(k, c, tol=0.0)
-    with pytest.raises(ValueError, match="degree"):
-        interpolated_pair_hessian(k, c, degree=1)
+    with pytest.raises(ValueError, match="degrees"):
+        interpolated_pair_hessian(k, c, degrees=(1, 8))
     H = interpolated_pair_hessian(k, c)
     with pytest.raises(ValueError, match="V has shape"):
         H @ np.ones(5)
