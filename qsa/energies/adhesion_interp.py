@@ -545,6 +545,21 @@ def interpolated_pair_hessian(kernel, c: Curve, *, tol=1e-10, degrees=DEGREES,
     return replace(ip, tol=tol, error_estimate=err)
 
 
+def _block_diagonal(A, C):
+    """``blockdiag(A, C)`` (CSR) by concatenating the CSR arrays: one copy of ``C`` and
+    no COO intermediate."""
+    n = A.shape[0]
+    nnz = A.nnz + C.nnz
+    itype = np.int32 if nnz < 2**31 and n + C.shape[1] < 2**31 else np.int64
+    indptr = np.concatenate([A.indptr.astype(np.int64), A.nnz + C.indptr[1:].astype(np.int64)])
+    data, indices = np.empty(nnz), np.empty(nnz, dtype=itype)
+    data[:A.nnz], data[A.nnz:] = A.data, C.data
+    indices[:A.nnz] = A.indices
+    np.add(C.indices, n, out=indices[A.nnz:], casting="unsafe")
+    return sp.csr_matrix((data, indices, indptr.astype(itype)),
+                         shape=(n + C.shape[0], A.shape[1] + C.shape[1]))
+
+
 def interpolated_reduced_hessian(c: Curve, ip: InterpolatedPairHessian,
                                  fields=None) -> ReducedHessian:
     """The adhesion Hessian ``nabla_I^2 E_A`` with the pair term ``B C B^T + D``, factored.
@@ -587,7 +602,7 @@ def interpolated_reduced_hessian(c: Curve, ip: InterpolatedPairHessian,
     m = C.shape[0]
     Luu = local.Luu + Su.T @ D @ Su
     Lyu = sp.vstack([local.Lyu + Sy.T @ D @ Su, sp.csr_matrix((m, 2 * N))], format="csr")
-    Lyy = sp.block_diag([local.Lyy + Sy.T @ D @ Sy, C], format="csr")
+    Lyy = _block_diagonal(sp.csr_matrix(local.Lyy + Sy.T @ D @ Sy), C)
     cY = sp.bmat([[local.cY, None], [-(BT @ Sy), sp.identity(m, format="csr")]], format="csr")
     cU = sp.vstack([local.cU, -(BT @ Su)], format="csr")
     return ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=local.left)
