@@ -32,7 +32,9 @@ no pair there; within the kept blocks the coarse pairs beyond the cutoff at
 ``tol / 100`` are dropped too), and ``D`` block diagonal (one 3 x 3 block per node): the exact
 diagonal blocks of ``K`` (row sums over the neighbour list, streamed panel by panel)
 minus those of ``B C B^T``. ``M`` depends on the curve's length over ``l*`` and its
-curvature, not on ``N``; storage is O(N + nnz(C)).
+curvature, not on ``N``, once the panels hold more nodes than their degrees (below
+that, short panels keep all their nodes and ``M`` grows with ``N`` up to its limit);
+storage is O(N + nnz(C)), the kernel values of the pairs are never stored.
 
 Error control: rows of ``K`` at one random node per panel (at most ``samples``) are
 evaluated exactly (O(N) each) and compared with the compressed rows;
