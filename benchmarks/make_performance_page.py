@@ -55,6 +55,7 @@ BENCHES = (
     Bench("bench_adhesion_hessian", "The adhesion Hessian", ("--quick",)),
     Bench("bench_folded", "Spectra of folded (CHA) states", ("--quick",)),
     Bench("bench_far_field", "Hierarchical adhesion pair Hessian", ("--quick",), ("--large",)),
+    Bench("bench_pair_interp", "Interpolated adhesion pair Hessian"),
     Bench("bench_capacitance_gmres", "The capacitance by deflated GMRES",
           ("--N", "1200", "2400", "--compare")),
     Bench("bench_constraints", "Length and area constraints"),

@@ -115,8 +115,8 @@ from qsa.discretize import cumulative_factors
 from qsa.linalg import BlockSparse, ReducedHessian
 from qsa.linalg.implicit import OperatorPairHessian
 
-__all__ = ["AdhesionDerivatives", "adhesion_derivatives", "cumulative_factors",
-           "position_state_equations", "HESSIAN_FORMS"]
+__all__ = ["AdhesionDerivatives", "adhesion_derivatives", "adjoint_fields", "cumulative_factors",
+           "local_reduced_parts", "position_state_equations", "HESSIAN_FORMS"]
 
 #: The assembled forms of :meth:`AdhesionDerivatives.hessian`.
 HESSIAN_FORMS = ("auto", "dense", "reduced")
@@ -170,6 +170,71 @@ def position_state_equations(c: Curve):
                  format="csr")
     cU = sp.bmat([[R @ d(-g), R @ d(-kappa)], [O, R @ d(-cs)], [O, R @ d(-sn)]], format="csr")
     return cY, cU
+
+
+def adjoint_fields(c: Curve, F):
+    """``(P, a, p, beta)`` of the reverse sweep from ``F = dE^/dX`` (module docstring).
+
+    Parameters
+    ----------
+    c : Curve
+    F : ndarray, shape (N, 2)
+
+    Returns
+    -------
+    P : ndarray, shape (N, 2)
+        ``C^T F``.
+    a, p, beta : ndarray, shape (N,)
+        ``P . tau``, ``P . tau'``, ``C^T (g p)``.
+    """
+    grid = c.grid
+    th = c.theta()
+    cs, sn = np.cos(th), np.sin(th)
+    P = grid.cumulative_transpose(F)
+    a = P[:, 0] * cs + P[:, 1] * sn
+    p = -P[:, 0] * sn + P[:, 1] * cs
+    return P, a, p, grid.cumulative_transpose(c.g * p)
+
+
+def local_reduced_parts(c: Curve, a, p, beta):
+    """The local part of the reduced Hessian and the pair term's selections ``Su, Sy``.
+
+    The Lagrangian Hessian of the module docstring splits as ``local + S^T K S`` with
+    ``S (u, y) = Su u + Sy y = (y_x, y_y, omega u_g)`` and the local part
+    ``L_UU = [[0, beta], [beta, 0]]``, ``L_YU = [[0, p], [0, 0], [0, 0]]``,
+    ``L_YY = diag(-g a, 0, 0)`` (finite differences).
+
+    Parameters
+    ----------
+    c : Curve
+        On a finite-difference grid.
+    a, p, beta : ndarray, shape (N,)
+        The adjoint fields (:func:`adjoint_fields`).
+
+    Returns
+    -------
+    local : ReducedHessian, shape (2N, 2N)
+        With the state equations :func:`position_state_equations` and
+        ``left = diag(1 / dsigma)``.
+    Su : scipy.sparse.csr_matrix, shape (3N, 2N)
+    Sy : scipy.sparse.csr_matrix, shape (3N, 3N)
+    """
+    N = c.N
+    g, om = c.g, c.grid.weights
+    d = sp.diags
+    Z = sp.csr_matrix((N, N))
+    bI = lambda v: d(np.broadcast_to(v, N).astype(float), format="csr")
+    grid = lambda blocks: BlockSparse(blocks).tocsr()
+    Luu = grid([[Z, bI(beta)], [bI(beta), Z]])
+    Lyu = grid([[Z, bI(p)], [Z, Z], [Z, Z]])
+    Lyy = grid([[bI(-g * a), Z, Z], [Z, Z, Z], [Z, Z, Z]])
+    cY, cU = position_state_equations(c)
+    ds = c.dsigma
+    local = ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=d(1.0 / np.concatenate([ds, ds])))
+    I = sp.identity(N, format="csr")
+    Su = grid([[Z, Z], [Z, Z], [Z, bI(om)]])
+    Sy = grid([[Z, I, Z], [Z, Z, I], [Z, Z, Z]])
+    return local, Su, Sy
 
 
 class _Entries:
@@ -590,20 +655,7 @@ class AdhesionDerivatives:
         N = c.N
         if pair.shape != (3 * N, 3 * N):
             raise ValueError(f"pair must have shape {(3 * N, 3 * N)}, got {pair.shape}")
-        g, om = c.g, c.grid.weights
-        d = sp.diags
-        Z = sp.csr_matrix((N, N))
-        bI = lambda v: d(np.broadcast_to(v, N).astype(float), format="csr")
-        grid = lambda blocks: BlockSparse(blocks).tocsr()
-        Luu = grid([[Z, bI(self.beta)], [bI(self.beta), Z]])
-        Lyu = grid([[Z, bI(self.p)], [Z, Z], [Z, Z]])
-        Lyy = grid([[bI(-g * self.a), Z, Z], [Z, Z, Z], [Z, Z, Z]])
-        cY, cU = position_state_equations(c)
-        ds = c.dsigma
-        local = ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=d(1.0 / np.concatenate([ds, ds])))
-        I = sp.identity(N, format="csr")
-        Su = grid([[Z, Z], [Z, Z], [Z, bI(om)]])
-        Sy = grid([[Z, I, Z], [Z, Z, I], [Z, Z, Z]])
+        local, Su, Sy = local_reduced_parts(c, self.a, self.p, self.beta)
         return OperatorPairHessian(local, pair, Su, Sy)
 
     def hessian(self, form="auto"):
@@ -673,13 +725,7 @@ def adhesion_derivatives(kernel, c: Curve, pairs) -> AdhesionDerivatives:
     F = np.column_stack([np.bincount(i, fx * wiwj, N) - np.bincount(j, fx * wiwj, N),
                          np.bincount(i, fy * wiwj, N) - np.bincount(j, fy * wiwj, N)])
     B = 2.0 * kernel.A0 * w + 2.0 * (np.bincount(i, A * w[j], N) + np.bincount(j, A * w[i], N))
-    grid = c.grid
-    th = c.theta()
-    cs, sn = np.cos(th), np.sin(th)
-    P = grid.cumulative_transpose(F)
-    a = P[:, 0] * cs + P[:, 1] * sn
-    p = -P[:, 0] * sn + P[:, 1] * cs
-    beta = grid.cumulative_transpose(c.g * p)
+    P, a, p, beta = adjoint_fields(c, F)
     return AdhesionDerivatives(
         curve=c, A0=float(kernel.A0), i=i, j=j,
         kxx=ww4 * (t * dx * dx + dA), kxy=ww4 * t * dx * dy, kyy=ww4 * (t * dy * dy + dA),
