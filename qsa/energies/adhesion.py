@@ -394,6 +394,11 @@ class _LastCall:
 _LAST_PAIRS = _LastCall()
 
 
+# Neighbour lists with at least this many pairs make the spectral solvers' Hessian
+# (Adhesion.factored_hessian) panel-interpolated when that is of lower rank than N: the
+# assembled two-point blocks take ~0.8 kB per pair (~4 GB here)
+INTERPOLATE_PAIRS = 5_000_000
+
 # Neighbour lists taken with a slightly wider reach, at the last few positions: a curve
 # that moved by less than the margin (the perturbed copies of a residual-floor estimate,
 # a small Newton step) gets its exact list by filtering one of them, in the same sorted
@@ -987,6 +992,37 @@ class Adhesion(Energy):
         ndarray or ReducedHessian, shape (2N, 2N)
         """
         return self.derivatives(c).hessian(form)
+
+    def factored_hessian(self, c):
+        """``nabla_I^2 E_A`` for the spectral solvers: :meth:`hessian`, or on finite-difference
+        grids with many interacting pairs the panel-interpolated form.
+
+        With at least ``INTERPOLATE_PAIRS`` pairs in the neighbour list, the pair Hessian
+        is compressed by :func:`~qsa.energies.adhesion_interp.interpolated_pair_hessian`
+        (storage O(N + M^2) instead of ~0.8 kB per pair) and, when its rank ``3M`` is
+        below ``N``, returned as the extended-state
+        :func:`~qsa.energies.adhesion_interp.interpolated_reduced_hessian`. That matrix
+        carries the compression's error estimate
+        (:meth:`~qsa.linalg.ReducedHessian.approximation_error`), which the spectra add
+        to their eigenvalues' error estimates. Otherwise the exact reduced (or dense) form.
+
+        Parameters
+        ----------
+        c : Curve
+
+        Returns
+        -------
+        ndarray or ReducedHessian, shape (2N, 2N)
+        """
+        if c.grid.sparse and self.method == "neighbours":
+            x, y = c.positions()
+            if adhesion_pairs(self.kernel, x, y)[0].size >= INTERPOLATE_PAIRS:
+                from qsa.energies.adhesion_interp import interpolated_hessian
+
+                H = interpolated_hessian(self.kernel, c)
+                if H is not None:
+                    return H
+        return self.hessian(c)
 
     def hessian_vector(self, c, v) -> np.ndarray:
         """``nabla_I^2 E_A v`` without assembling the Hessian (O(N + pairs) per vector).

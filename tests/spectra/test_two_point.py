@@ -70,3 +70,32 @@ def test_lagrangian_and_energy_hessians_are_self_adjoint_for_the_kernel_report_n
             X[:, 0] @ (w2 * AX[:, 1]))
         lanczos = operator_norm(c, A, iters=8, symmetric=True)
         assert abs(lanczos - operator_norm(c, A, iters=30)) <= 1e-3 * lanczos
+
+
+def test_interpolated_pair_hessian_gives_the_assembled_spectrum(monkeypatch):
+    """With many pairs, the spectrum takes the panel-interpolated pair Hessian (coarse state
+    of rank 3M < N, factored by the sparse LU): the same eigenvalues as the assembled
+    blocks, within error estimates that now carry the compression's estimate."""
+    from qsa.energies import adhesion as ad
+    from qsa.energies.adhesion_interp import interpolated_hessian
+
+    c = Curve.polar(lambda t: 1 + 0.3 * np.cos(3 * t) + 0.05 * np.sin(5 * t),
+                    FiniteDifference(1000))
+    E = _cha(c, 0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exact = spectrum(E, c, k=6)
+        monkeypatch.setattr(ad, "INTERPOLATE_PAIRS", 0)
+        H = E.terms()[-1].factored_hessian(c)
+        approx = spectrum(E, c, k=6)
+    assert H.approximations and H.cY.shape[0] > 3 * c.N  # the extended (coarse) state
+    assert H.cY.shape[0] - 3 * c.N < c.N
+    assert np.allclose(approx.eigenvalues, exact.eigenvalues, rtol=0, atol=1e-8)
+    diff = np.abs(approx.eigenvalues - exact.eigenvalues)
+    assert np.all(diff <= approx.errors + exact.errors)
+    assert np.all(approx.errors > exact.errors)  # the compression's estimate is included
+    # the estimate of a form's change is zero without compression and positive with it
+    u = np.random.default_rng(1).standard_normal((2 * c.N, 2))
+    assert np.all(H.approximation_error(u, u) > 0)
+    # a state whose coarse rank is not below N is left to the assembled blocks
+    assert interpolated_hessian(E.terms()[-1].kernel, c, max_rank=10) is None
