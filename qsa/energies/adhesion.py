@@ -51,7 +51,11 @@ from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
 from qsa._checks import real_number
-from qsa.energies.adhesion_hessian import AdhesionDerivatives, adhesion_derivatives
+from qsa.energies.adhesion_hessian import (
+    AdhesionDerivatives,
+    adhesion_derivatives,
+    adjoint_fields,
+)
 from qsa.energies.adhesion_velocity import VelocityJacobian, adhesion_velocity_jacobian
 from qsa.energies.base import Energy
 
@@ -973,7 +977,12 @@ class Adhesion(Energy):
         >>> bool(np.allclose(back, E.extrinsic_gradient(c), atol=1e-6))
         True
         """
-        return self.derivatives(c).gradient()
+        # from the fields alone (the second-derivative data of derivatives() is not needed)
+        B, force = self.fields(c)
+        _, a, _, beta = adjoint_fields(c, c.dsigma[:, None] * force)
+        ds = c.dsigma
+        return (np.concatenate([c.g * beta, a + c.kappa * beta + c.grid.weights * B])
+                / np.concatenate([ds, ds]))
 
     def hessian(self, c, form="auto"):
         """``nabla_I^2 E_A`` in ``<f, h> = int f h dsigma``: exact, dsigma-self-adjoint.
