@@ -27,6 +27,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from qsa import Curve, Fourier
+from qsa._checks import real_number
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.equilibria import polish
 from qsa.flows import CHA, solve_flow
@@ -512,6 +513,11 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
     params = {"eps": float(eps), "beta": float(beta), "rho": float(rho), "L0": float(L0),
               "L_star": L_star, "A0": float(A0), "l_star": float(l_star), "a": float(a)}
     E = folded_energy(eps, beta, L_star, A0, l_star, a)
+    if kernel_resolve is not None:
+        kernel_resolve = real_number(kernel_resolve, "kernel_resolve", positive=True)
+    if spectrum_options is not None and not isinstance(spectrum_options, dict):
+        raise ValueError(f"spectrum_options: need a dict of keywords of qsa.spectra.spectrum, "
+                         f"got {type(spectrum_options).__name__}")
     sopts = dict(spectrum_options or {})
     pr = polish(E, guess, tol=tol, maxiter=maxiter)
     refinements, sp, stop = [], None, None

@@ -81,6 +81,10 @@ def test_bad_nodes():
 
     with pytest.raises(ValueError, match="x: a Curve guess must be on a Fourier grid"):
         analyse(Curve.circle(1.0, FiniteDifference(40)), None)
+    with pytest.raises(ValueError, match="kernel_resolve"):
+        analyse(*nodes(), kernel_resolve=-1e-3)
+    with pytest.raises(ValueError, match="spectrum_options"):
+        analyse(*nodes(), spectrum_options=8)
 
 
 def test_curve_guess_without_spectrum(fe):
