@@ -10,10 +10,16 @@ computes the spectrum of the linearization ``J`` (normal gauge) with its kernel
 checks the spectrum against the DAE: the CHA flow started from the polished state
 displaced along its slowest decaying mode relaxes at a rate measured from the
 projection of ``V^n`` on that mode's eigenspace, to compare with the eigenvalue.
+
+The grid is refined (``Fourier(2N - 1)``) while it does not resolve the state: while
+``max|V^n|`` is above ``resolve`` of its scale, or the rigid motions' eigenvalues are
+above ``kernel_resolve`` of the slowest other ``|lambda|``; a state still unresolved at
+``max_N`` is flagged (``resolved = False``, :class:`UnderResolvedWarning`).
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -21,6 +27,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from qsa import Curve, Fourier
+from qsa._checks import real_number
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.equilibria import polish
 from qsa.flows import CHA, solve_flow
@@ -33,8 +40,17 @@ if TYPE_CHECKING:
     from qsa.equilibria.newton import PolishResult
     from qsa.spectra.result import Spectrum
 
-__all__ = ["FoldedEquilibrium", "folded_energy", "folded_equilibrium", "folded_equilibria",
-           "relaxation_rate"]
+__all__ = ["FoldedEquilibrium", "UnderResolvedWarning", "folded_energy", "folded_equilibrium",
+           "folded_equilibria", "kernel_resolution", "relaxation_rate"]
+
+
+class UnderResolvedWarning(UserWarning):
+    """The largest grid allowed does not resolve a folded state (see ``resolved``).
+
+    Issued by :func:`folded_equilibrium` when the refinements stop at ``max_N`` (or a
+    refined polish fails) with ``max|V^n|`` or the rigid motions' eigenvalues above
+    their tests: the slow eigenvalues on that grid are not to be trusted.
+    """
 
 
 def folded_energy(eps, beta, L_star, A0, l_star, a):
@@ -68,7 +84,16 @@ class FoldedEquilibrium:
         ``(FlowResult, times, projected amplitude)`` of the rate check.
     refinements : list of dict
         Spectral refinements of the polish (``N, success, relative_V, energy_change,
-        n_newton``; see ``resolve`` of :func:`folded_equilibrium`).
+        n_newton`` of the finer grid, and ``reason``: ``"residual"`` or ``"kernel"``,
+        the test the coarser grid failed; for ``"kernel"`` also that grid's
+        ``kernel_ratio, kernel_eigenvalues, slowest``, see :func:`kernel_resolution`;
+        see ``resolve`` and ``kernel_resolve`` of :func:`folded_equilibrium`).
+    resolved : bool or None
+        Whether the grid ``N`` resolves the state: ``max|V^n|`` within ``resolve`` of
+        its scale and the rigid motions' eigenvalues within ``kernel_resolve`` of the
+        slowest other ``|lambda|`` (``None``: neither test was run, e.g. a failed polish).
+    unresolved_reason : str or None
+        Why not, and why the grid was not refined further (``max_N``, a failed polish).
     """
 
     name: str
@@ -82,6 +107,8 @@ class FoldedEquilibrium:
     rate: dict | None = None
     flow: tuple | None = field(default=None, repr=False)
     refinements: list = field(default_factory=list)
+    resolved: bool | None = None
+    unresolved_reason: str | None = None
 
     @property
     def curve(self):
@@ -127,8 +154,9 @@ class FoldedEquilibrium:
 
     @property
     def success(self) -> bool:
-        """Polished, spectrum computed and (if run) the rate within 1% of the eigenvalue."""
-        ok = bool(self.polished.success) and self.spectrum is not None
+        """Polished, spectrum computed, not flagged unresolved and (if run) the rate within 1%."""
+        ok = (bool(self.polished.success) and self.spectrum is not None
+              and self.resolved is not False)
         if self.rate is not None:
             ok = ok and self.rate["success"] and self.rate["relative_error"] <= 0.01
         return ok
@@ -146,9 +174,12 @@ class FoldedEquilibrium:
                "length": float(self.curve.length()),
                "energy": float(self.energy.energy(self.curve)),
                "sheets": self.sheets().to_dict(),
+               "resolved": self.resolved, "unresolved_reason": self.unresolved_reason,
                "success": self.success}
         sp = self.spectrum
         if sp is not None:
+            kr = kernel_resolution(sp)
+            out["kernel_ratio"] = None if kr is None else kr["ratio"]
             lam = sp.eigenvalues
             out.update(n_unstable=self.n_unstable, stable=self.stable,
                        n_kernel=int(sp.n_kernel), kernel_tol=float(sp.kernel_tol),
@@ -347,9 +378,63 @@ def _decay_rate(fe, i, same, N, amplitude, T, tol, snapshots, symmetric=True):
     return rate, res, projected, abs(sub[1] - sub[0])
 
 
+def kernel_resolution(sp: Spectrum) -> dict | None:
+    """How far the rigid motions' eigenvalues are from 0, against the slowest other ``|lambda|``.
+
+    In the continuum the normal components of the rigid motions span the kernel of
+    ``J`` exactly; on a grid their Ritz values (the spectrum's kernel eigenvalues)
+    differ from 0 by the grid's error in the rigid-motion identities of the
+    linearization (for the two-point adhesion: its quadrature, at a few nodes per
+    ``l*``), and the eigenvalues near 0 are off by about as much. So ``kernel_level``,
+    the largest ``|lambda| + error`` over the kernel (``Spectrum.kernel_tol``), is an
+    estimate of the absolute error of the slow eigenvalues, and ``ratio`` that of the
+    slowest one's relative error.
+
+    ``slowest`` is the smallest ``|lambda|`` outside the kernel among the eigenvalues
+    the grid has: those reported and those the two-resolution check rejected as
+    spurious (a slow mode that drifts between the resolutions is the symptom of an
+    under-resolved state, and the check rejects it), less the rejected values within
+    ``kernel_level`` (rigid modes among them).
+
+    Parameters
+    ----------
+    sp : Spectrum
+
+    Returns
+    -------
+    dict or None
+        ``kernel_level, kernel_eigenvalues, slowest, ratio`` (``ratio = kernel_level /
+        slowest``); None when the spectrum failed, or has no kernel or no other
+        eigenvalue.
+
+    Examples
+    --------
+    >>> from qsa import Fourier
+    >>> from qsa.equilibria import npulse
+    >>> from qsa.spectra import spectrum
+    >>> eq = npulse(3, 0.3)
+    >>> kr = kernel_resolution(spectrum(eq.energy, eq.curve))
+    >>> bool(kr["ratio"] < 1e-3), len(kr["kernel_eigenvalues"])
+    (True, 3)
+    """
+    if not sp.success or sp.n_kernel == 0:
+        return None
+    lam = np.real(sp.eigenvalues)
+    level = float(sp.kernel_tol)
+    spurious = np.abs(np.real(sp.spurious))
+    others = np.concatenate([np.abs(lam[~sp.is_kernel]), spurious[spurious > level]])
+    if others.size == 0:
+        return None
+    slowest = float(np.min(others))
+    ratio = level / slowest if slowest > 0 else np.inf
+    return {"kernel_level": level, "kernel_eigenvalues": [float(v) for v in lam[sp.is_kernel]],
+            "slowest": slowest, "ratio": float(ratio)}
+
+
 def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded", tol=1e-10,
                        maxiter=40, n_slow=6, rate_check=True, rate_options=None,
-                       with_spectrum=True, resolve=1e-9, max_N=4801):
+                       with_spectrum=True, resolve=1e-9, max_N=4801, kernel_resolve=1e-3,
+                       spectrum_options=None):
     """Polish the final state of a CHA flow; spectrum, stability and relaxation rate.
 
     Parameters
@@ -365,7 +450,8 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
     tol, maxiter : float, int
         Newton target (relative residual) and step limit (:func:`qsa.equilibria.polish`);
         ``maxiter=0`` evaluates the state as given (on ``Fourier(N)``, at equal arc
-        length), with ``success`` whether it is an equilibrium to ``tol`` already.
+        length), with ``success`` whether it is an equilibrium to ``tol`` already, and
+        no refinement (the tests below still flag an unresolved state).
     n_slow : int
         Number of slowest modes reported.
     rate_check : bool
@@ -374,7 +460,8 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
         Keywords of :func:`relaxation_rate`.
     with_spectrum : bool
         Compute the spectrum (and run the rate check) after a successful polish; False:
-        the polish only (``spectrum`` stays ``None``, and so ``success`` False).
+        the polish only (``spectrum`` stays ``None``, and so ``success`` False; no
+        kernel test).
     resolve : float or None
         Resolution test of the polished state: on a grid too coarse for the state,
         the rigid-motion identities of the two-point ``V^n`` hold only to the grid's
@@ -386,11 +473,27 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
         (``None``: no test).
     max_N : int
         Largest grid of the refinements.
+    kernel_resolve : float or None
+        Resolution test of the spectrum (after the ``resolve`` test passes): the
+        rigid motions' eigenvalues, zero in the continuum, are off on a grid by the
+        error of the linearization's rigid-motion identities, and the slow eigenvalues
+        by about as much (:func:`kernel_resolution`). While their level (largest
+        ``|lambda| + error``) exceeds ``kernel_resolve`` of the slowest other
+        ``|lambda|``, the grid is refined as for ``resolve`` and the spectrum computed
+        again. The default ``1e-3`` asks the slowest eigenvalue to about 0.1%, a tenth
+        of the 1% of the rate check. ``None``: no test.
+    spectrum_options : dict, optional
+        Keywords of :func:`qsa.spectra.spectrum` (e.g. ``{"k": 10}``, the ten
+        eigenvalues nearest 0 by shift-invert, for grids where the whole spectrum and
+        its two-resolution check do not fit in memory).
 
     Returns
     -------
     FoldedEquilibrium
-        A failed polish gives ``success=False``, the last iterate and no spectrum.
+        A failed polish gives ``success=False``, the last iterate and no spectrum. A
+        state that the grids up to ``max_N`` do not resolve has ``resolved=False``, the
+        reason in ``unresolved_reason`` and ``success=False``, and an
+        :class:`UnderResolvedWarning` is issued.
     """
     if isinstance(x, Curve) and y is None:
         if not isinstance(x.grid, Fourier):
@@ -406,35 +509,84 @@ def folded_equilibrium(x, y, *, eps, beta, rho, L0, A0, l_star, a, name="folded"
         # hold only to the grid's order, so no exact equilibrium (nor kernel) exists there
         N = x.size + 1 - x.size % 2
         guess = Curve.from_positions(x, y, Fourier(N))
-    N = guess.N
     L_star = float(rho) * float(L0)
     params = {"eps": float(eps), "beta": float(beta), "rho": float(rho), "L0": float(L0),
               "L_star": L_star, "A0": float(A0), "l_star": float(l_star), "a": float(a)}
     E = folded_energy(eps, beta, L_star, A0, l_star, a)
+    if kernel_resolve is not None:
+        kernel_resolve = real_number(kernel_resolve, "kernel_resolve", positive=True)
+    if spectrum_options is not None and not isinstance(spectrum_options, dict):
+        raise ValueError(f"spectrum_options: need a dict of keywords of qsa.spectra.spectrum, "
+                         f"got {type(spectrum_options).__name__}")
+    sopts = dict(spectrum_options or {})
     pr = polish(E, guess, tol=tol, maxiter=maxiter)
-    refinements = []
-    while (resolve is not None and maxiter > 0 and pr.success
-           and pr.residual > resolve * pr.residual_scale and 2 * pr.curve.N - 1 <= max_N):
-        fine = polish(E, pr.curve.on_grid(Fourier(2 * pr.curve.N - 1)), tol=tol,
-                      maxiter=maxiter)
+    refinements, sp, stop = [], None, None
+    while pr.success:
+        sp, why = None, None
+        if resolve is not None and pr.residual > resolve * pr.residual_scale:
+            why = {"reason": "residual"}
+        elif with_spectrum:
+            sp = spectrum(E, pr.curve, **sopts)
+            kr = kernel_resolution(sp) if kernel_resolve is not None else None
+            if kr is not None and kr["ratio"] > kernel_resolve:
+                why = {"reason": "kernel", "kernel_ratio": kr["ratio"],
+                       "kernel_eigenvalues": kr["kernel_eigenvalues"],
+                       "slowest": kr["slowest"]}
+        if why is None:
+            break
+        N2 = 2 * pr.curve.N - 1
+        if maxiter == 0 or N2 > max_N:
+            stop = ("the state is evaluated as given (maxiter = 0)" if maxiter == 0 else
+                    f"Fourier({N2}) is beyond max_N = {max_N}")
+            break
+        fine = polish(E, pr.curve.on_grid(Fourier(N2)), tol=tol, maxiter=maxiter)
         refinements.append({"N": int(fine.curve.N), "success": bool(fine.success),
                             "relative_V": float(fine.residual / fine.residual_scale),
                             "energy_change": float(E.energy(fine.curve) - E.energy(pr.curve)),
-                            "n_newton": int(fine.n_newton)})
+                            "n_newton": int(fine.n_newton), **why})
         if not fine.success:
+            stop = f"the polish on Fourier({N2}) failed: {fine.message}"
             break
         pr = fine
-    N = pr.curve.N
-    fe = FoldedEquilibrium(name=name, params=params, N=N, energy=E, guess=guess, polished=pr,
-                           n_slow=int(n_slow), refinements=refinements)
-    if not (pr.success and with_spectrum):
+    fe = FoldedEquilibrium(name=name, params=params, N=pr.curve.N, energy=E, guess=guess,
+                           polished=pr, n_slow=int(n_slow), refinements=refinements)
+    if not pr.success:
         return fe
-    fe.spectrum = spectrum(E, pr.curve)
+    if sp is None and with_spectrum:
+        sp = spectrum(E, pr.curve, **sopts)
+    fe.spectrum = sp
+    _resolution_verdict(fe, resolve, kernel_resolve, stop)
+    if sp is None:
+        return fe
     if rate_check:
         rate = relaxation_rate(fe, **(rate_options or {}))
         fe.flow = rate.pop("_flow")
         fe.rate = rate
     return fe
+
+
+def _resolution_verdict(fe, resolve, kernel_resolve, stop):
+    """Set ``fe.resolved`` and ``fe.unresolved_reason`` from the two tests; warn if unresolved."""
+    pr, failed, tested = fe.polished, [], False
+    if resolve is not None:
+        tested = True
+        rel = pr.residual / pr.residual_scale
+        if rel > resolve:
+            failed.append(f"max|V^n| is {rel:.2e} of its scale (resolve = {resolve:g})")
+    kr = None if fe.spectrum is None or kernel_resolve is None else kernel_resolution(fe.spectrum)
+    if kr is not None:
+        tested = True
+        if kr["ratio"] > kernel_resolve:
+            failed.append(f"the rigid motions' eigenvalues reach {kr['kernel_level']:.2e}, "
+                          f"{kr['ratio']:.2g} of the slowest other |lambda| "
+                          f"{kr['slowest']:.4g} (kernel_resolve = {kernel_resolve:g})")
+    if not tested:
+        return
+    fe.resolved = not failed
+    if failed:
+        fe.unresolved_reason = (f"Fourier({fe.N}) does not resolve the state: "
+                                + "; ".join(failed) + (f"; not refined: {stop}" if stop else ""))
+        warnings.warn(f"{fe.name}: {fe.unresolved_reason}", UnderResolvedWarning, stacklevel=3)
 
 
 def folded_equilibria(runs, **options):
