@@ -56,6 +56,7 @@ from qsa.energies.adhesion_hessian import (
     adhesion_derivatives,
     adjoint_fields,
 )
+from qsa.energies.adhesion_interp import interpolated_hessian
 from qsa.energies.adhesion_velocity import VelocityJacobian, adhesion_velocity_jacobian
 from qsa.energies.base import Energy
 
@@ -1026,8 +1027,6 @@ class Adhesion(Energy):
         if c.grid.sparse and self.method == "neighbours":
             x, y = c.positions()
             if adhesion_pairs(self.kernel, x, y)[0].size >= INTERPOLATE_PAIRS:
-                from qsa.energies.adhesion_interp import interpolated_hessian
-
                 H = interpolated_hessian(self.kernel, c)
                 if H is not None:
                     return H
