@@ -124,6 +124,11 @@ def run(args):
     return 0 if spec.success else 1
 
 
+# largest rigid-motion eigenvalue, relative to the slowest other one, of a resolved state
+# (the default of qsa.paper.folded.folded_equilibrium's kernel test)
+KERNEL_RESOLVE = 1e-3
+
+
 def run_cha(args):
     """``qsa spectrum cha``: the spectrum at the CHA state of ``--from`` (``--polish``ed)."""
     from qsa.commands import _folded
@@ -144,7 +149,17 @@ def run_cha(args):
     summary["slowest_errors"] = [float(sp.errors[i]) for i in fe.slowest]
     summary["spectrum"] = sp.summary(args.show)
     summary["warnings"] = [str(w.message) for w in caught]
-    summary["success"] = bool(summary["success"] and sp.success)
+    ratio = summary.get("kernel_ratio")
+    if ratio is not None and ratio > KERNEL_RESOLVE:
+        # the rigid motions' eigenvalues measure the slow eigenvalues' grid error
+        why = (f"the rigid motions' eigenvalues are {ratio:.1e} of the slowest |lambda| "
+               f"(above {KERNEL_RESOLVE:g}): this grid does not resolve the state and its "
+               f"slow eigenvalues are not to be trusted; use more nodes")
+        summary.update(resolved=False, unresolved_reason=why)
+        summary["warnings"].append(why)
+        caught.append(warnings.WarningMessage(why, UserWarning, __file__, 0))
+    summary["success"] = bool(summary["success"] and sp.success
+                              and summary.get("resolved") is not False)
     if args.save:
         from qsa.io import save_spectrum
 

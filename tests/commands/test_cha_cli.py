@@ -259,3 +259,27 @@ def test_failed_polish_exits_1_with_the_residual(files, capsys):
 def test_cha_is_not_a_kind_of_bifurcate(capsys):
     code, _, err = run(capsys, "bifurcate", "cha", "--from", "x.npz")
     assert code == 2 and "invalid choice" in err
+
+
+def test_spectrum_of_an_under_resolved_state_says_so(tmp_path, capsys):
+    """A zipped dumbbell at 1.4 nodes per l*: polished (V^n ~ 1e-11 of its scale), but its
+    rigid motions' eigenvalues are a large fraction of the slowest one, so the slow
+    eigenvalues are not to be trusted: a warning, ``resolved`` False, exit status 1."""
+    from qsa.paper.near_contact import paired_dumbbell
+
+    st = paired_dumbbell(0.05, N=201, t_flow=0.5)
+    x, y = st.curve.positions()
+    p = st.params
+    write_output(str(tmp_path), "cha_zip",
+                 {"snap_t": np.array([0.0]), "snap_x": x[None], "snap_y": y[None]},
+                 {"scenario": "cha_zip", "params": {**{k: p[k] for k in
+                                                      ("eps", "beta", "rho", "A0", "l_star",
+                                                       "a")}, "N": x.size},
+                  "L0": p["L0"]})
+    run_file = tmp_path / "cha_zip.npz"
+    code, s, _ = run_json(capsys, "spectrum", "cha", "--from", run_file, "--show", "4")
+    assert code == 1 and s["resolved"] is False and not s["success"]
+    assert s["kernel_ratio"] > 1e-3
+    assert any("does not resolve the state" in w for w in s["warnings"])
+    code, out, _ = run(capsys, "spectrum", "cha", "--from", run_file, "--show", "4")
+    assert code == 1 and "warning: the rigid motions' eigenvalues are" in out
