@@ -32,8 +32,8 @@ its compression has the lower rank.
 ``--gmres`` solves the capacitance by deflated GMRES instead of its LU
 (``qsa.spectra.capacitance.ITERATIVE``; the assembled blocks are still needed).
 
-Run: ``python benchmarks/bench_folded.py [--quick] [--l-star 0.01] [--from FILE] [--folded]
-[--gmres]``
+Run: ``python benchmarks/bench_folded.py [--quick] [--N N ...] [--l-star 0.01] [--from FILE]
+[--folded] [--gmres]``
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ import numpy as np
 from qsa import Curve, FiniteDifference, Fourier, io
 from qsa.commands._memory import available_bytes, format_bytes
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
-from qsa.energies.adhesion import INTERPOLATE_PAIRS, adhesion_pairs
+from qsa.energies.adhesion import ASSEMBLED_PAIRS_LIMIT, INTERPOLATE_PAIRS, adhesion_pairs
 from qsa.energies.adhesion_interp import interpolated_pair_hessian
 from qsa.paper.scenarios import CHAScenario
 from qsa.spectra import capacitance, spectrum
@@ -134,7 +134,7 @@ def measure(scenario, N, method, source, gmres=False):
     rank = None
     if method == "neighbours" and P >= INTERPOLATE_PAIRS:  # the spectrum's own test
         r = interpolated_pair_hessian(kernel, c).rank
-        rank = r if r < N else None
+        rank = r if r < N or P >= ASSEMBLED_PAIRS_LIMIT else None
     need, have = BYTES_PER_PAIR * P, available_bytes()
     if rank is None and need > 0.8 * have:
         print(f"N = {N}: skipped, {P} pairs need about {format_bytes(need)} "
@@ -170,10 +170,12 @@ def main():
                     help="a folded state (flow result, checkpoint or equilibrium file)")
     ap.add_argument("--folded", action="store_true",
                     help="the rho = 1.4 folded state of f:fold instead of the crenellated start")
+    ap.add_argument("--N", type=int, nargs="+", default=None,
+                    help="the neighbour-list sizes (default 1200 2400 4800 10000)")
     ap.add_argument("--gmres", action="store_true",
                     help="the capacitance by deflated GMRES (capacitance.ITERATIVE)")
     args = ap.parse_args()
-    Ns = [1200, 2400] if args.quick else [1200, 2400, 4800, 10_000]
+    Ns = args.N or ([1200, 2400] if args.quick else [1200, 2400, 4800, 10_000])
     source = "folded" if args.folded else args.source
     if args.folded:  # its sheets touch at 1200 nodes (chords of the resampled curve cross)
         Ns = [N for N in Ns if N >= 2400]

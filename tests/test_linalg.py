@@ -289,3 +289,7 @@ def test_approximation_errors_follow_the_algebra():
     got = stacked.approximation_error(big, big)
     assert calls == [(7, 2)]
     assert np.allclose(got, np.abs(np.sum(big[7:] * big[7:], axis=0)))
+    # the count of coarse (compressed) state rows is carried the same way
+    H.coarse_states = 3
+    assert (2.0 * H).coarse_states == (D @ H).coarse_states == (H @ D).coarse_states == 3
+    assert (H2 + H).coarse_states == (H + H).coarse_states - 3 == 3

@@ -403,6 +403,9 @@ _LAST_PAIRS = _LastCall()
 # (Adhesion.factored_hessian) panel-interpolated when that is of lower rank than N: the
 # assembled two-point blocks take ~0.8 kB per pair (~4 GB here)
 INTERPOLATE_PAIRS = 5_000_000
+# and beyond this many the interpolated form is taken whatever its rank: the assembled
+# blocks with the spectrum's work would take ~15 GB
+ASSEMBLED_PAIRS_LIMIT = 12_000_000
 
 # Neighbour lists taken with a slightly wider reach, at the last few positions: a curve
 # that moved by less than the margin (the perturbed copies of a residual-floor estimate,
@@ -1010,7 +1013,8 @@ class Adhesion(Energy):
         With at least ``INTERPOLATE_PAIRS`` pairs in the neighbour list, the pair Hessian
         is compressed by :func:`~qsa.energies.adhesion_interp.interpolated_pair_hessian`
         (storage O(N + M^2) instead of ~0.8 kB per pair) and, when its rank ``3M`` is
-        below ``N``, returned as the extended-state
+        below ``N`` (or whatever it is with ``ASSEMBLED_PAIRS_LIMIT`` pairs or more),
+        returned as the extended-state
         :func:`~qsa.energies.adhesion_interp.interpolated_reduced_hessian`. That matrix
         carries the compression's error estimate
         (:meth:`~qsa.linalg.ReducedHessian.approximation_error`), which the spectra add
@@ -1026,8 +1030,10 @@ class Adhesion(Energy):
         """
         if c.grid.sparse and self.method == "neighbours":
             x, y = c.positions()
-            if adhesion_pairs(self.kernel, x, y)[0].size >= INTERPOLATE_PAIRS:
-                H = interpolated_hessian(self.kernel, c)
+            P = adhesion_pairs(self.kernel, x, y)[0].size
+            if P >= INTERPOLATE_PAIRS:
+                H = interpolated_hessian(self.kernel, c, max_rank=(
+                    None if P < ASSEMBLED_PAIRS_LIMIT else 1 << 62))
                 if H is not None:
                     return H
         return self.hessian(c)

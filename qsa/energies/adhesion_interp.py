@@ -677,4 +677,5 @@ def interpolated_hessian(kernel, c: Curve, *, tol=1e-10, max_rank=None, rel=1e-1
                 * np.sqrt(np.sum(weight.reshape((-1,) + (1,) * (e.ndim - 1)) * e * e, axis=0)))
 
     H.approximations = (estimate,)
+    H.coarse_states = ip.rank  # dense, factored by the sparse LU (use_capacitance)
     return H

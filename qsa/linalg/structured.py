@@ -217,6 +217,9 @@ class ReducedHessian:
         # f(l, u) estimates |l^T dK u| column by column for l, u in K's domain; sums,
         # multiples and products with sparse matrices carry them (approximation_error)
         self.approximations: tuple = ()
+        # state rows of compressed (coarse) blocks: dense, but fewer than the nodes' rows;
+        # the shift-invert solvers factor them by the sparse LU (carried like approximations)
+        self.coarse_states = 0
 
     # ----------------------------------------------------------------- shape
     @property
@@ -246,6 +249,7 @@ class ReducedHessian:
         if not changes.keys() & {"Luu", "Lyu", "Lyy", "cY", "cU"}:
             out._core = self._core  # same core: share what is derived from it
             out.approximations = self.approximations
+            out.coarse_states = self.coarse_states
         return out
 
     def approximation_error(self, l, u) -> np.ndarray:
@@ -590,6 +594,7 @@ class ReducedHessian:
                                      self.S + other.S, np.hstack([self.U, other.U]),
                                      np.hstack([self.V, other.V]))
                 out.approximations = self.approximations + other.approximations
+                out.coarse_states = self.coarse_states + other.coarse_states
                 return out
             out = ReducedHessian(bd(self.Luu, other.Luu), bd(self.Lyu, other.Lyu),
                                  bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
@@ -600,6 +605,7 @@ class ReducedHessian:
             out.approximations = (
                 tuple(_restricted(f, slice(0, p)) for f in self.approximations)
                 + tuple(_restricted(f, slice(p, None)) for f in other.approximations))
+            out.coarse_states = self.coarse_states + other.coarse_states
             return out
         if isinstance(other, SparsePlusLowRank):
             return self._with(S=self.S + other.S, U=np.hstack([self.U, other.U]),
@@ -617,6 +623,7 @@ class ReducedHessian:
             return NotImplemented
         out = self._with(left=c * self.left, S=c * self.S, U=c * self.U)
         out.approximations = self.approximations  # l = Lf^T psi carries the factor c
+        out.coarse_states = self.coarse_states
         return out
 
     __rmul__ = __mul__

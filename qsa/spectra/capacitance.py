@@ -70,16 +70,17 @@ def use_capacitance(K, N) -> bool:
     -------
     bool
         True when ``Lyy`` averages at least ``WIDE_ROW`` entries per row, ``N`` is at
-        least ``MIN_NODES`` and more than ``N`` of its rows are wide.
+        least ``MIN_NODES`` and more than ``N`` of its rows are wide, not counting the
+        coarse states of compressed terms (``K.coarse_states``).
     """
     q = K.cY.shape[0]
     if not (q > 0 and N >= MIN_NODES and K.Lyy.nnz >= WIDE_ROW * q):
         return False
-    # the wide rows confined to a block smaller than N (a compressed two-point term: its
-    # coarse state, qsa.energies.adhesion_interp): the sparse LU factors that block as a
-    # dense one, cheaper than forming and factoring the N x N capacitance
+    # the wide rows confined to a block smaller than N, or to the coarse state of a
+    # compressed two-point term (qsa.energies.adhesion_interp; dense, but the capacitance
+    # would multiply it N times): the sparse LU factors that block as a dense one
     wide = int(np.count_nonzero(np.diff(K.Lyy.indptr) > WIDE_ROW))
-    return wide > N
+    return wide - int(getattr(K, "coarse_states", 0)) > N
 
 
 class CapacitanceCore:

@@ -183,3 +183,11 @@ def test_wide_rows_confined_to_a_small_block_stay_with_the_sparse_lu():
     K2 = ReducedHessian(sp.identity(2 * N), sp.csr_matrix((q, 2 * N)), wide + wide.T,
                         sp.identity(q), sp.csr_matrix((q, 2 * N)))
     assert cap.use_capacitance(K2, N)
+    # more wide rows than N, all of them the coarse state of a compressed term: sparse LU
+    big = rng.standard_normal((2 * N, 2 * N))
+    K3 = ReducedHessian(sp.identity(2 * N), sp.csr_matrix((2 * N, 2 * N)),
+                        sp.csr_matrix(big + big.T), sp.identity(2 * N),
+                        sp.csr_matrix((2 * N, 2 * N)))
+    assert cap.use_capacitance(K3, N)
+    K3.coarse_states = 2 * N
+    assert not cap.use_capacitance(K3, N)
