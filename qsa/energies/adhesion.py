@@ -376,28 +376,35 @@ def _dense_pairs(N):
 
 
 class _LastCall:
-    """The value computed for the last key asked for, and only that (memory stays bounded).
+    """The values computed for the last ``size`` keys asked for (memory stays bounded).
 
     The analysis of one curve asks for the same pair list, fields and derivatives several
     times, each a pass over all pairs; the key holds the exact bytes of every input, so a
     hit returns what the computation would return.
     """
 
-    def __init__(self):
-        self._key = None
-        self._value = None
+    def __init__(self, size=1):
+        self._size = int(size)
+        self._entries: list = []  # (key, value), most recent first
 
     def get(self, key, compute):
-        if self._key is None or self._key != key:
-            value = compute()
-            self._key, self._value = key, value
-        return self._value
+        for k, (old, value) in enumerate(self._entries):
+            if old == key:
+                self._entries.insert(0, self._entries.pop(k))
+                return value
+        value = compute()
+        self._entries.insert(0, (key, value))
+        del self._entries[self._size:]
+        return value
 
 
 # The neighbour list at the last positions asked for: the energy's fields and its
 # derivatives at one curve each need it (a k-d tree query, ~0.5 s at 4M pairs).
 _LAST_PAIRS = _LastCall()
 
+
+# pairs per chunk of the field sums (their temporaries stay in cache)
+_PAIR_CHUNK = 1 << 16
 
 # Neighbour lists with at least this many pairs make the spectral solvers' Hessian
 # (Adhesion.factored_hessian) panel-interpolated when that is of lower rank than N: the
@@ -582,14 +589,17 @@ def adhesion_fields(kernel, x, y, w, *, pairs=None, method="neighbours"):
     i, j = _resolve_pairs(kernel, x, y, pairs, method)
     if np.all(w == w[0]):  # uniform weights (scaled arc length): fewer gathers
         return uniform_weight_fields(kernel, x, y, w[0], i, j)
-    dx = x[i] - x[j]
-    dy = y[i] - y[j]
-    Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
-    B = 2.0 * kernel.A0 * w
-    B = B + 2.0 * (np.bincount(i, Av * w[j], N) + np.bincount(j, Av * w[i], N))
-    fx = 4.0 * (np.bincount(i, dAv * dx * w[j], N) - np.bincount(j, dAv * dx * w[i], N))
-    fy = 4.0 * (np.bincount(i, dAv * dy * w[j], N) - np.bincount(j, dAv * dy * w[i], N))
-    return B, np.column_stack([fx, fy])
+    sA, sx, sy = np.zeros(N), np.zeros(N), np.zeros(N)
+    for start in range(0, i.size, _PAIR_CHUNK):
+        a, b = i[start:start + _PAIR_CHUNK], j[start:start + _PAIR_CHUNK]
+        dx = x[a] - x[b]
+        dy = y[a] - y[b]
+        Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
+        sA += np.bincount(a, Av * w[b], N) + np.bincount(b, Av * w[a], N)
+        sx += np.bincount(a, dAv * dx * w[b], N) - np.bincount(b, dAv * dx * w[a], N)
+        sy += np.bincount(a, dAv * dy * w[b], N) - np.bincount(b, dAv * dy * w[a], N)
+    B = 2.0 * kernel.A0 * w + 2.0 * sA
+    return B, np.column_stack([4.0 * sx, 4.0 * sy])
 
 
 def uniform_weight_fields(kernel, x, y, w, i, j):
@@ -623,15 +633,21 @@ def uniform_weight_fields(kernel, x, y, w, i, j):
     (True, True)
     """
     N = x.size
-    dx = x[i] - x[j]
-    dy = y[i] - y[j]
-    Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
-    B = 2.0 * w * (kernel.A0 + np.bincount(i, Av, N) + np.bincount(j, Av, N))
-    gx = dAv * dx
-    gy = dAv * dy
+    sA, sx, sy = np.zeros(N), np.zeros(N), np.zeros(N)
+    for start in range(0, i.size, _PAIR_CHUNK):  # chunks stay in cache: ~5x faster at 20M
+        a, b = i[start:start + _PAIR_CHUNK], j[start:start + _PAIR_CHUNK]
+        dx = x[a] - x[b]
+        dy = y[a] - y[b]
+        Av, dAv = kernel.derivatives(dx * dx + dy * dy, order=1)
+        sA += np.bincount(a, Av, N) + np.bincount(b, Av, N)
+        gx = dAv * dx
+        gy = dAv * dy
+        sx += np.bincount(a, gx, N) - np.bincount(b, gx, N)
+        sy += np.bincount(a, gy, N) - np.bincount(b, gy, N)
+    B = 2.0 * w * (kernel.A0 + sA)
     force = np.empty((N, 2))
-    force[:, 0] = 4.0 * w * (np.bincount(i, gx, N) - np.bincount(j, gx, N))
-    force[:, 1] = 4.0 * w * (np.bincount(i, gy, N) - np.bincount(j, gy, N))
+    force[:, 0] = 4.0 * w * sx
+    force[:, 1] = 4.0 * w * sy
     return B, force
 
 
@@ -815,9 +831,10 @@ def adhesion_field_jacobians(kernel, x, y, w, *, pairs=None, method="neighbours"
 # Hessian and Hessian-vector products at one curve several times, and each set costs a
 # pass over all pairs. One entry, keyed by the kernel and the curve's arrays.
 _LAST_DERIVATIVES = _LastCall()
-# Likewise the fields (B, force) at the last curve: its residual, multipliers and
-# residual floor each ask for the gradient again.
-_LAST_FIELDS = _LastCall()
+# Likewise the fields (B, force), O(N) each, at the last four curves: a curve's residual,
+# multipliers, residual scale and floor (at scaled and perturbed copies) and its kernel
+# report each ask for them.
+_LAST_FIELDS = _LastCall(size=4)
 
 
 @dataclass(frozen=True)
