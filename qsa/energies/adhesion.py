@@ -339,7 +339,9 @@ def pair_list(x, y, cutoff):
         return empty, empty.copy()
     i = np.minimum(pairs[:, 0], pairs[:, 1]).astype(np.intp)
     j = np.maximum(pairs[:, 0], pairs[:, 1]).astype(np.intp)
-    order = np.lexsort((j, i))
+    # one int64 key per (unique) pair; the tree's output comes in long sorted runs, which
+    # the stable sort (timsort) merges ~10x faster than lexsort
+    order = np.argsort(i.astype(np.int64) * x.size + j, kind="stable")
     return i[order], j[order]
 
 
