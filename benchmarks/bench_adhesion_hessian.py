@@ -19,11 +19,11 @@ Run: ``python benchmarks/bench_adhesion_hessian.py [--quick] [--memory-budget GB
 from __future__ import annotations
 
 import argparse
-import time
 import tracemalloc
 
 import numpy as np
 import scipy.sparse.linalg as spla
+from _timing import best_of
 
 from qsa import Curve, FiniteDifference
 from qsa.energies import Adhesion
@@ -39,15 +39,6 @@ BYTES_PER_PAIR = {"derivatives": 200, "reduced": 800}
 #: the saddle-point LU fills in like (pairs per node)^2 per node: beyond this many pairs
 #: per node (l* = 0.1 has ~400 at N = 2400, 380 s and 1.3e8 fill) a dense LU is cheaper
 LU_PAIRS_PER_NODE = 100
-
-
-def best_of(fn, repeat):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def peak_memory(fn):

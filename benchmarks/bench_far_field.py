@@ -23,6 +23,7 @@ import argparse
 import time
 
 import numpy as np
+from _timing import best_of
 
 from qsa import Curve, FiniteDifference
 from qsa.commands._memory import available_bytes, format_bytes
@@ -38,12 +39,8 @@ H_BYTES_PER_NODE = 100e3
 
 
 def cpu(f, repeat=1):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.process_time()
-        out = f()
-        best = min(best, time.process_time() - t0)
-    return best, out
+    """Least CPU seconds of ``repeat`` calls and the result."""
+    return best_of(f, repeat, clock=time.process_time)
 
 
 def estimated_pairs(N):

@@ -22,6 +22,7 @@ import argparse
 import time
 
 import numpy as np
+from _timing import best_of
 
 from qsa import Curve, FiniteDifference
 from qsa.commands._memory import format_bytes
@@ -34,12 +35,8 @@ ASSEMBLED_UP_TO = 2400  # the assembled K needs ~0.8 kB per pair (1.1M pairs at 
 
 
 def cpu(f, repeat=1):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.process_time()
-        out = f()
-        best = min(best, time.process_time() - t0)
-    return best, out
+    """Least CPU seconds of ``repeat`` calls and the result."""
+    return best_of(f, repeat, clock=time.process_time)
 
 
 def run(N, tol):

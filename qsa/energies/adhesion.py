@@ -453,6 +453,14 @@ def _within(x, y, i, j, cutoff, chunk=1 << 22):
     return i[keep].astype(np.intp), j[keep].astype(np.intp)
 
 
+def _cached_pairs(kernel, x, y, rel=1e-16):
+    """The neighbour list of :func:`adhesion_pairs` as kept (shared: read, never modify)."""
+    cutoff = kernel.cutoff_distance(rel)
+    xa, ya = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    key = (cutoff, xa.tobytes(), ya.tobytes())
+    return _LAST_PAIRS.get(key, lambda: _near_pairs(xa, ya, cutoff))
+
+
 def adhesion_pairs(kernel, x, y, *, method="neighbours", rel=1e-16):
     """Pairs entering the adhesion sums: a cutoff neighbour list or all pairs.
 
@@ -482,10 +490,7 @@ def adhesion_pairs(kernel, x, y, *, method="neighbours", rel=1e-16):
     True
     """
     if method == "neighbours":
-        cutoff = kernel.cutoff_distance(rel)
-        xa, ya = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-        key = (cutoff, xa.tobytes(), ya.tobytes())
-        hit = _LAST_PAIRS.get(key, lambda: _near_pairs(xa, ya, cutoff))
+        hit = _cached_pairs(kernel, x, y, rel)
         return hit[0].copy(), hit[1].copy()
     if method == "dense":
         x, _ = _check_positions(x, y)
@@ -1049,7 +1054,7 @@ class Adhesion(Energy):
         """
         if c.grid.sparse and self.method == "neighbours":
             x, y = c.positions()
-            P = adhesion_pairs(self.kernel, x, y)[0].size
+            P = _cached_pairs(self.kernel, x, y)[0].size
             if P >= INTERPOLATE_PAIRS:
                 H = interpolated_hessian(self.kernel, c, max_rank=(
                     None if P < ASSEMBLED_PAIRS_LIMIT else 1 << 62))

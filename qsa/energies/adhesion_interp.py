@@ -599,9 +599,14 @@ def interpolated_reduced_hessian(c: Curve, ip: InterpolatedPairHessian,
     """
     if not c.grid.sparse:
         raise ValueError("interpolated_reduced_hessian needs a finite-difference grid")
+    if ip.N != c.N:
+        raise ValueError(f"ip was built for N = {ip.N}, the curve has N = {c.N}")
+    return _extended(c, ip, fields)[0]
+
+
+def _extended(c, ip, fields=None):
+    """``(H, local, Su, Sy)``: :func:`interpolated_reduced_hessian` and the local parts."""
     N = c.N
-    if ip.N != N:
-        raise ValueError(f"ip was built for N = {ip.N}, the curve has N = {N}")
     a, p, beta = adjoint_fields(c, ip.F)[1:] if fields is None else fields
     local, Su, Sy = local_reduced_parts(c, a, p, beta)
     D, C = ip.D, ip.C
@@ -612,7 +617,7 @@ def interpolated_reduced_hessian(c: Curve, ip: InterpolatedPairHessian,
     Lyy = _block_diagonal(sp.csr_matrix(local.Lyy + Sy.T @ D @ Sy), C)
     cY = sp.bmat([[local.cY, None], [-(BT @ Sy), sp.identity(m, format="csr")]], format="csr")
     cU = sp.vstack([local.cU, -(BT @ Su)], format="csr")
-    return ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=local.left)
+    return ReducedHessian(Luu, Lyu, Lyy, cY, cU, left=local.left), local, Su, Sy
 
 
 def interpolated_hessian(kernel, c: Curve, *, tol=1e-10, max_rank=None, rel=1e-16):
@@ -657,9 +662,7 @@ def interpolated_hessian(kernel, c: Curve, *, tol=1e-10, max_rank=None, rel=1e-1
     ip = interpolated_pair_hessian(kernel, c, tol=tol, rel=rel)
     if ip.rank > (c.N - 1 if max_rank is None else max_rank):
         return None
-    H = interpolated_reduced_hessian(c, ip)
-    a, p, beta = adjoint_fields(c, ip.F)[1:]
-    local, Su, Sy = local_reduced_parts(c, a, p, beta)
+    H, local, Su, Sy = _extended(c, ip)
     # the error rows at one node of each panel (stratified sample)
     ptr = np.asarray(ip.fine_ptr)
     sizes = np.diff(ptr)

@@ -621,10 +621,8 @@ class ReducedHessian:
     def __mul__(self, c):
         if not np.isscalar(c):
             return NotImplemented
-        out = self._with(left=c * self.left, S=c * self.S, U=c * self.U)
-        out.approximations = self.approximations  # l = Lf^T psi carries the factor c
-        out.coarse_states = self.coarse_states
-        return out
+        # the core is unchanged, so _with carries approximations (l = Lf^T psi takes c)
+        return self._with(left=c * self.left, S=c * self.S, U=c * self.U)
 
     __rmul__ = __mul__
 
