@@ -688,5 +688,8 @@ def interpolated_hessian(kernel, c: Curve, *, tol=1e-10, max_rank=None, rel=1e-1
         return ERROR_SAFETY * np.minimum(sampled, cs)
 
     H.approximations = (estimate,)
-    H.coarse_states = ip.rank  # dense, factored by the sparse LU (use_capacitance)
+    # dense, the last rows of the extended state: the shift-invert core is eliminated
+    # onto them (qsa.spectra.coarse)
+    H.coarse_states = ip.rank
+    H.coarse_index = np.arange(H.cY.shape[0] - ip.rank, H.cY.shape[0])
     return H

@@ -218,8 +218,10 @@ class ReducedHessian:
         # multiples and products with sparse matrices carry them (approximation_error)
         self.approximations: tuple = ()
         # state rows of compressed (coarse) blocks: dense, but fewer than the nodes' rows;
-        # the shift-invert solvers factor them by the sparse LU (carried like approximations)
+        # the shift-invert solvers eliminate the rest onto them (carried like approximations)
         self.coarse_states = 0
+        # which state rows (of q) they are: the coarse Schur solver's layout
+        self.coarse_index = np.zeros(0, dtype=np.intp)
 
     # ----------------------------------------------------------------- shape
     @property
@@ -250,7 +252,12 @@ class ReducedHessian:
             out._core = self._core  # same core: share what is derived from it
             out.approximations = self.approximations
             out.coarse_states = self.coarse_states
+            out.coarse_index = self.coarse_index
         return out
+
+    def _stacked_coarse(self, other) -> np.ndarray:
+        """The coarse state rows of ``self``'s states followed by ``other``'s."""
+        return np.concatenate([self.coarse_index, other.coarse_index + self.cY.shape[0]])
 
     def approximation_error(self, l, u) -> np.ndarray:
         """Estimate of ``|l^T dK u|`` from the approximated parts of ``K`` (zeros if none).
@@ -595,6 +602,7 @@ class ReducedHessian:
                                      np.hstack([self.V, other.V]))
                 out.approximations = self.approximations + other.approximations
                 out.coarse_states = self.coarse_states + other.coarse_states
+                out.coarse_index = self._stacked_coarse(other)
                 return out
             out = ReducedHessian(bd(self.Luu, other.Luu), bd(self.Lyu, other.Lyu),
                                  bd(self.Lyy, other.Lyy), bd(self.cY, other.cY),
@@ -606,6 +614,7 @@ class ReducedHessian:
                 tuple(_restricted(f, slice(0, p)) for f in self.approximations)
                 + tuple(_restricted(f, slice(p, None)) for f in other.approximations))
             out.coarse_states = self.coarse_states + other.coarse_states
+            out.coarse_index = self._stacked_coarse(other)
             return out
         if isinstance(other, SparsePlusLowRank):
             return self._with(S=self.S + other.S, U=np.hstack([self.U, other.U]),

@@ -78,6 +78,7 @@ from qsa.linalg import BlockSparse, Factorization, ReducedHessian, SparsePlusLow
 from qsa.spectra import capacitance
 from qsa.spectra.capacitance import CapacitanceCore, use_capacitance
 from qsa.spectra.capacitance_iterative import IterativeCapacitanceCore
+from qsa.spectra.coarse import CoarseSchurCore
 from qsa.spectra.refinement import BorderedSystem, Probe, column_norms, probe, refined_solve
 
 __all__ = ["FactoredNormalOperator", "ShiftInvert", "EigenErrors"]
@@ -474,7 +475,9 @@ class ShiftInvert:
         capacitance matrix: :class:`~qsa.spectra.capacitance.CapacitanceCore`), or
         ``"gmres"`` (the same capacitance solved by deflated GMRES, never formed:
         :class:`~qsa.spectra.capacitance_iterative.IterativeCapacitanceCore`; only when
-        ``qsa.spectra.capacitance.ITERATIVE`` is set, off by default).
+        ``qsa.spectra.capacitance.ITERATIVE`` is set, off by default), or ``"coarse"`` (a
+        compressed two-point term's coarse state: the rest eliminated onto it, then
+        LAPACK; :class:`~qsa.spectra.coarse.CoarseSchurCore`).
 
     Examples
     --------
@@ -554,6 +557,17 @@ class ShiftInvert:
                 self._lu = Factorization.from_solver(cap, B1, B2, D)
                 self._capacitance = cap
                 self.core_solver = "gmres" if capacitance.ITERATIVE else "capacitance"
+        reduced = op.reduced
+        if (self._lu is None and sparse and reduced is not None
+                and reduced.coarse_index.size):
+            try:
+                coarse = CoarseSchurCore(core.tocsr(), N, reduced.Luu.shape[0],
+                                         reduced.cY.shape[0], reduced.coarse_index)
+            except (ValueError, np.linalg.LinAlgError):
+                pass  # not of that structure, or a singular block: SuperLU takes it whole
+            else:
+                self._lu = Factorization.from_solver(coarse, B1, B2, D)
+                self.core_solver = "coarse"
         if self._lu is None:
             self._lu = factorize(core.tocsc() if sparse else core, B1, B2, D)
         self._free = None
