@@ -628,6 +628,11 @@ class ShiftInvert:
             chig = chig + op.U[N:] @ (op.V.T @ psi_full)
         return np.concatenate([chik, chig], axis=0)
 
+    def unrefined_error(self) -> float:
+        """Relative forward error of an unrefined :meth:`solve`, as measured by the probe
+        (:attr:`~qsa.spectra.refinement.Probe.unrefined`)."""
+        return self._probe(self._lu, self._B1.shape[1]).unrefined
+
     def solve(self, b, refine=1, estimate=False):
         """``phi`` with ``(W J - sigma W) phi + W [Rc; R]^T mu = b``, ``[Rc; R] W phi = 0``.
 

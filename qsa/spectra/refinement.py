@@ -20,7 +20,8 @@ precisions:
 
 :func:`probe` solves two random right-hand sides and refines them once in working
 precision, then computes one more correction with the residual in extended and in mixed
-precision. If the extended correction still exceeds ``1e-10`` of the solution,
+precision (the first step's size is the unrefined solve's forward error,
+:attr:`Probe.unrefined`). If the extended correction still exceeds ``1e-10`` of the solution,
 working-precision refinement stalls (the shifted system is nearly singular) and every
 refinement and estimate is done in extended precision. Otherwise the probe compares the
 rounding noise of the mixed residual, ``rho = |dx_mixed - dx_ext| / |x|``, with the
@@ -142,6 +143,9 @@ class Probe:
     accuracy : float
         The smallest relative forward error ``|dx_ext| / |x|`` after one working-precision
         refinement.
+    unrefined : float
+        The largest relative size ``|dx_1| / |x|`` of the first refinement step: the
+        forward error of an unrefined solve.
 
     Parameters
     ----------
@@ -151,6 +155,7 @@ class Probe:
     extended: bool
     noise: float
     accuracy: float
+    unrefined: float = 0.0
 
     @property
     def mixed(self) -> bool:
@@ -182,7 +187,9 @@ def probe(solve, system: BorderedSystem, p, w, seed=3) -> Probe:
     for j in range(2):
         rhs[:N, j] = rng.standard_normal(N) * w
     x = solve(rhs)
-    x = x + solve(system.residual(rhs, x, p))
+    first = solve(system.residual(rhs, x, p))
+    x = x + first
+    unrefined = float(np.max(column_norms(first, w) / column_norms(x, w)))
     residuals = [system.residual(rhs, x, p, "extended")]
     if system.wide is not None:
         residuals.append(system.residual(rhs, x, p, "mixed"))
@@ -193,7 +200,7 @@ def probe(solve, system: BorderedSystem, p, w, seed=3) -> Probe:
     noise = 0.0
     if system.wide is not None:
         noise = float(np.max(column_norms(dx[:, 2:] - dx[:, :2], w) / xn))
-    return Probe(extended, noise, float(np.min(column_norms(dx[:, :2], w) / xn)))
+    return Probe(extended, noise, float(np.min(column_norms(dx[:, :2], w) / xn)), unrefined)
 
 
 def refined_solve(solve, system: BorderedSystem, p, rhs, refine, found: Probe, w,

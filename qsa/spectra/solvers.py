@@ -30,7 +30,7 @@ from qsa.linalg import SparsePlusLowRank, factorize, to_dense
 from qsa.spectra.factored import FactoredNormalOperator
 
 __all__ = ["EigenSolution", "certified_eigenpairs", "dense_normal", "general_eigenpairs",
-           "DENSE_INVERSE_LIMIT", "MAX_CERTIFIED"]
+           "DENSE_INVERSE_LIMIT", "MAX_CERTIFIED", "UNREFINED"]
 
 _EPS = np.finfo(float).eps
 
@@ -41,6 +41,10 @@ DENSE_INVERSE_LIMIT = 400
 #: Largest number of eigenvalues near 0 recomputed from the factors when the dense
 #: path leaves them uncertified.
 MAX_CERTIFIED = 60
+
+#: ARPACK runs on unrefined solves through a coarse state (then polished) when their
+#: measured relative forward error is at most this.
+UNREFINED = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,11 +113,14 @@ def _arpack(op, si, R, k, seed=0):
     (:mod:`qsa.spectra.capacitance`), whose solves are accurate to about ``1e-8`` before
     refinement and whose refinement costs two more passes over the two-point blocks,
     ARPACK runs on the unrefined solves and its Ritz subspace is then polished with
-    refined ones (:func:`_polish`), which also give the errors.
+    refined ones (:func:`_polish`), which also give the errors. So it does through a
+    coarse state (:mod:`qsa.spectra.coarse`) when the probe measures the unrefined
+    solves' forward error at most :data:`UNREFINED`.
     """
     N = op.N
     w = op.w
-    fast = getattr(si, "core_solver", None) == "capacitance"
+    route = getattr(si, "core_solver", None)
+    fast = route == "capacitance" or (route == "coarse" and si.unrefined_error() <= UNREFINED)
     matvec = (lambda x: si.solve(x, refine=0)) if fast else si.solve
     OPinv = spla.LinearOperator((N, N), matvec=matvec, dtype=float)
     A = spla.LinearOperator((N, N), matvec=lambda x: op.matvec(x) * w, dtype=float)
