@@ -14,13 +14,16 @@ need more than 80% of the available memory is skipped with a message.
 
 Each size is measured in two fresh processes: one timed (memory tracing slows numpy's
 allocations by ~20%), one with ``tracemalloc`` for the peak; neither sees the other's
-cached derivatives. Timings are single-threaded BLAS; wall-clock is noisy on a shared
-machine, CPU time less so.
+cached derivatives. The performance page runs it with one BLAS thread (set
+``OPENBLAS_NUM_THREADS=1`` to compare; the dense LAPACK steps of the coarse route use
+more threads when given them); wall-clock is noisy on a shared machine, CPU time less so.
 
 With at least ``qsa.energies.adhesion.INTERPOLATE_PAIRS`` pairs the spectrum takes the
 panel-interpolated pair Hessian when its coarse rank ``3M`` is below ``N``
 (``qsa.energies.adhesion_interp``): the column ``rank`` shows it (``-`` for the assembled
-blocks), and the memory check then does not apply.
+blocks), and the memory check then does not apply. Its shift-invert core is then
+eliminated onto the coarse state and the dense ``rank x rank`` system factored by LAPACK
+(``qsa.spectra.coarse``).
 
 ``--folded`` measures the folded state of f:fold at rho = 1.4 (Table T1, l* = 0.1: the
 1200-node flow's state at t = 30 on Fourier(601), kept with the tests) resampled to

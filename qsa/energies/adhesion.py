@@ -410,11 +410,12 @@ _PAIR_CHUNK = 1 << 16
 
 # Neighbour lists with at least this many pairs make the spectral solvers' Hessian
 # (Adhesion.factored_hessian) panel-interpolated when that is of lower rank than N: the
-# assembled two-point blocks take ~0.8 kB per pair (~4 GB here)
-INTERPOLATE_PAIRS = 5_000_000
-# and beyond this many the interpolated form is taken whatever its rank: the assembled
-# blocks with the spectrum's work would take ~15 GB
-ASSEMBLED_PAIRS_LIMIT = 12_000_000
+# assembled two-point blocks take ~0.8 kB per pair (~2.4 GB here), and the coarse
+# route (qsa.spectra.coarse) is as fast at ~2.7M pairs (folded CHA state, N = 3600),
+# 1.7 times faster at 4.9M (N = 4800)
+INTERPOLATE_PAIRS = 3_000_000
+# and from this many on the interpolated form is taken whatever its rank
+ASSEMBLED_PAIRS_LIMIT = 3_000_000
 
 # Neighbour lists taken with a slightly wider reach, at the last few positions: a curve
 # that moved by less than the margin (the perturbed copies of a residual-floor estimate,
