@@ -124,3 +124,20 @@ def test_the_coarse_rows_keep_their_place_through_sums():
     s = rh(5, [3, 4]) + rh(6, [1])
     assert s.coarse_index.tolist() == [3, 4, 6] and s.coarse_states == 3
     assert (2.0 * s).coarse_index.tolist() == [3, 4, 6]
+
+
+def test_the_probe_measures_the_unrefined_error(compressed):
+    """The probe's first refinement step sizes an unrefined solve's forward error; through
+    the coarse state it is small enough for ARPACK to run on unrefined solves."""
+    from qsa.spectra.refinement import column_norms
+    from qsa.spectra.solvers import UNREFINED
+
+    c, E, op = compressed
+    si = op.shift_invert(0.0)
+    w = op.w
+    b = w[:, None] * np.random.default_rng(2).standard_normal((op.N, 3))
+    x0, x2 = si.solve(b, refine=0), si.solve(b, refine=2)
+    actual = np.max(column_norms(x0 - x2, w) / column_norms(x2, w))
+    est = si.unrefined_error()
+    assert 0 < est <= UNREFINED
+    assert est / 30 <= actual <= 30 * est
