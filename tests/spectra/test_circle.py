@@ -1,11 +1,13 @@
 """Circle spectra against the closed form (Conventions, section 4), all gauges, both grids."""
 
+import warnings
+
 import numpy as np
 import pytest
 
 from qsa import FiniteDifference, Fourier
 from qsa.equilibria import circle
-from qsa.spectra import MESSAGES, linearization, spectrum
+from qsa.spectra import MESSAGES, UnresolvedEigenvalueWarning, linearization, spectrum
 from tests.helpers import assert_status_convention, fitted_order
 from tests.reference.circle_spectra import (
     PAPER_GAUGE_MAX_EIGENVALUE,
@@ -129,9 +131,15 @@ def test_helfrich_circle_comoving_fourier():
 
 def _fd_low_mode_errors(make, lam0, gauge, modes, Ns):
     errs = []
+    slow = np.min(np.abs(lam0[lam0 != 0]))
     for N in Ns:
         energy, c = make(FiniteDifference(N))
-        s = spectrum(energy, c, gauge=gauge)
+        # the comoving gauge's kernel (the reparameterizations) is defective: rounding
+        # splits it into a few tiny eigenvalue estimates that fail the accuracy test
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UnresolvedEigenvalueWarning)
+            s = spectrum(energy, c, gauge=gauge)
+        assert np.all(np.abs(s.unresolved) < 1e-3 * slow)
         errs.append(max(np.min(np.abs(s.eigenvalues - lam0[k])) / abs(lam0[k]) for k in modes))
     return errs
 

@@ -9,6 +9,7 @@ from qsa.equilibria import npulse, polish, splice_polygon
 from qsa.spectra import (
     MESSAGES,
     NotEquilibriumWarning,
+    UnresolvedEigenvalueWarning,
     kernel_report,
     lagrange_hessian,
     normal_operator,
@@ -248,7 +249,12 @@ def test_comoving_and_scaled_gauges_at_the_npulse(triangle, triangle_spectrum):
     big = sc.eigenvalues[np.abs(sc.eigenvalues) > sc.kernel_tol]
     refbig = lamJ[np.abs(lamJ) > ref.kernel_tol]
     assert np.allclose(np.sort(big)[-20:], np.sort(refbig)[-20:], rtol=1e-7)
-    co = spectrum(triangle.energy, triangle.curve, gauge="comoving")
+    # its kernel (the reparameterizations) is defective: rounding splits it into
+    # clusters of small estimates (+-0.0139 at N = 81) that fail the accuracy test
+    with pytest.warns(UnresolvedEigenvalueWarning, match="failed the accuracy test"):
+        co = spectrum(triangle.energy, triangle.curve, gauge="comoving")
+    assert co.unresolved.size and np.all(np.abs(co.unresolved) < 0.1)
+    assert np.min(np.abs(lamJ[np.abs(lamJ) > ref.kernel_tol])) > 10 * np.max(np.abs(co.unresolved))
     assert co.n_unstable == 3 and co.spurious.size > 0
     assert "under-resolved reparameterization" in co.message
     kept = co.eigenvalues[np.abs(co.eigenvalues) > co.kernel_tol]
