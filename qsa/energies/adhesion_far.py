@@ -45,6 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from qsa.energies.adhesion_hessian import pair_vectors
 from qsa.linalg.hierarchical import (
     BlockPartition,
     HierarchicalMatrix,
@@ -179,10 +180,8 @@ class HierarchicalPairHessian:
         -------
         ndarray, shape like ``V``
         """
-        V = np.asarray(V, dtype=float)
         N = self.N
-        if V.shape[:1] != (3 * N,) or V.ndim > 2:
-            raise ValueError(f"V has shape {V.shape}, expected ({3 * N},) or ({3 * N}, m)")
+        V = pair_vectors(V, N)
         vx, vy, vw = V[:N], V[N:2 * N], V[2 * N:]
         b = self.block_matvec
         col = (lambda a: a) if V.ndim == 1 else (lambda a: a[:, None])

@@ -122,6 +122,15 @@ __all__ = ["AdhesionDerivatives", "adhesion_derivatives", "adjoint_fields", "cum
 HESSIAN_FORMS = ("auto", "dense", "reduced")
 
 
+def pair_vectors(V, N) -> np.ndarray:
+    """``V`` as float vectors in the pair Hessian's ordering ``(x, y, w)``: shape (3N,)
+    or (3N, m), else a ``ValueError`` naming the expected shape."""
+    V = np.asarray(V, dtype=float)
+    if V.shape[:1] != (3 * N,) or V.ndim > 2:
+        raise ValueError(f"V has shape {V.shape}, expected ({3 * N},) or ({3 * N}, m)")
+    return V
+
+
 def position_state_equations(c: Curve):
     """Jacobians ``(cY, cU)`` of the equations of the state ``Y = (theta, x, y)``.
 

@@ -59,7 +59,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from qsa.curve import Curve
-from qsa.energies.adhesion_hessian import adjoint_fields, local_reduced_parts
+from qsa.energies.adhesion_hessian import adjoint_fields, local_reduced_parts, pair_vectors
 from qsa.linalg import ReducedHessian
 
 __all__ = ["InterpolatedPairHessian", "interpolated_pair_hessian",
@@ -418,10 +418,7 @@ class InterpolatedPairHessian:
         -------
         ndarray, shape like ``V``
         """
-        V = np.asarray(V, dtype=float)
-        if V.shape[:1] != (3 * self.N,) or V.ndim > 2:
-            raise ValueError(f"V has shape {V.shape}, expected ({3 * self.N},) or "
-                             f"({3 * self.N}, m)")
+        V = pair_vectors(V, self.N)
         B = self.B
         return B @ (self.C @ (B.T @ V)) + self.D @ V
 
