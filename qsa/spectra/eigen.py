@@ -152,7 +152,7 @@ def solve(energy, curve: Curve, gauge, k=None, sigma=None, rtol=1e-5, lagrange=N
         LH = lagrange_hessian(energy, curve, constraints=cons)
     w = curve.dsigma
     if gauge == "normal":
-        op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
+        op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix, LH.energy_hessian)
         rigid_basis, cbasis = constraint_bases(curve, cons)
         basis, rigid = rigid_basis, None
         if not deflate:
@@ -427,7 +427,7 @@ def spectrum(energy, curve: Curve, k=None, sigma=None, gauge="normal", *, kernel
         notes.append(text)
     if deflate is None:
         deflate = LH.is_equilibrium(equilibrium_tol)
-    op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
+    op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix, LH.energy_hessian)
     basis, cbasis = constraint_bases(curve, cons)
 
     try:

@@ -119,6 +119,10 @@ class FactoredNormalOperator:
         two-point energies on finite-difference grids, :class:`~qsa.linalg.ReducedHessian`):
         ``Lf K Rf`` with sparse factors; its implicit state becomes extra sparse unknowns
         of the shift-invert system.
+    approximated : ReducedHessian or None
+        ``W2`` times a compressed part of ``L_Lambda`` that a dense term made dense (e.g.
+        a compressed two-point energy with an area constraint): kept for its error
+        estimate (:meth:`~qsa.linalg.ReducedHessian.approximation_error`) alone.
 
     Parameters
     ----------
@@ -147,9 +151,10 @@ class FactoredNormalOperator:
     V: np.ndarray
     w: np.ndarray
     reduced: Any = None
+    approximated: Any = None
 
     @classmethod
-    def from_lagrangian(cls, curve: Curve, L) -> FactoredNormalOperator:
+    def from_lagrangian(cls, curve: Curve, L, approximated=None) -> FactoredNormalOperator:
         """The factors of ``J`` for the Lagrangian Hessian ``L`` (dsigma-self-adjoint).
 
         Parameters
@@ -158,6 +163,11 @@ class FactoredNormalOperator:
         L : matrix, shape (2N, 2N)
             ``L_Lambda``: dense, sparse, :class:`~qsa.linalg.SparsePlusLowRank` or
             :class:`~qsa.linalg.ReducedHessian`.
+        approximated : matrix, optional
+            The part of ``L`` that may be compressed (the energy's Hessian,
+            :attr:`LagrangeHessian.energy_hessian <qsa.spectra.LagrangeHessian>`): when
+            ``L`` is not a :class:`~qsa.linalg.ReducedHessian` but this one is and carries
+            approximations, their error estimates still join the eigenvalues' errors.
 
         Returns
         -------
@@ -175,8 +185,12 @@ class FactoredNormalOperator:
                 K = None
         if K is not None:
             K = sp.diags(w2) @ K
+        kept = None
+        if (K is None and isinstance(approximated, ReducedHessian)
+                and approximated.approximations):
+            kept = sp.diags(w2) @ approximated
         return cls(curve, geometry.helmholtz(curve), curve.g * curve.kappa, H,
-                   w2[:, None] * U, V, w, K)
+                   w2[:, None] * U, V, w, K, kept)
 
     @property
     def N(self) -> int:
@@ -335,9 +349,10 @@ class FactoredNormalOperator:
         approx = 0.0
         if self.reduced is not None:
             total = total + _reduced_rounding(self.reduced, psi)
-            K = self.reduced
-            # a compressed two-point term: its own error estimate, not a rounding
-            approx = K.approximation_error(K.left.T @ psi, K.right @ psi)
+        # a compressed two-point term: its own error estimate, not a rounding
+        for K in (self.reduced, self.approximated):
+            if K is not None:
+                approx = approx + K.approximation_error(K.left.T @ psi, K.right @ psi)
         return _EPS * total + approx
 
 

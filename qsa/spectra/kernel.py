@@ -368,7 +368,7 @@ def kernel_report(energy, curve: Curve, eigenvalues=None, kernel_tol=None,
     check_input(energy, curve)
     cons = bind_constraints(constraints, curve)
     LH = lagrange_hessian(energy, curve, constraints=cons)
-    op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
+    op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix, LH.energy_hessian)
     basis, cbasis = constraint_bases(curve, cons)
     m = basis.shape[0]
     if eigenvalues is None:

@@ -384,7 +384,7 @@ def sector_spectrum(energy, curve: Curve, symmetry=None, k=None, sigma=0.0, sect
         raise ValueError(f"k must be a positive integer, got {k!r}")
     cons = bind_constraints(constraints, curve)
     LH = lagrange if lagrange is not None else lagrange_hessian(energy, curve, constraints=cons)
-    op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix)
+    op = FactoredNormalOperator.from_lagrangian(curve, LH.matrix, LH.energy_hessian)
     R, Rc = constraint_bases(curve, cons)
     w = curve.dsigma
     si = _shift(op, float(sigma), R, np.append(op.ritz_values(R), 0.0), Rc)

@@ -141,3 +141,25 @@ def test_the_probe_measures_the_unrefined_error(compressed):
     est = si.unrefined_error()
     assert 0 < est <= UNREFINED
     assert est / 30 <= actual <= 30 * est
+
+
+def test_a_dense_constraint_term_keeps_the_compression_estimate(compressed, monkeypatch):
+    """An area constraint's Hessian is dense, so the Lagrangian Hessian is formed densely:
+    the compressed pair term's error estimate must still join the eigenvalues' errors."""
+    from qsa.constraints import FixedArea
+
+    c, E, op = compressed
+    cons = [FixedArea(c.area())]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exact = spectrum(E, c, k=6, constraints=cons)
+        monkeypatch.setattr(ad, "INTERPOLATE_PAIRS", 0)
+        LH = lagrange_hessian(E, c, constraints=cons)
+        approx = spectrum(E, c, k=6, constraints=cons)
+    assert isinstance(LH.matrix, np.ndarray) and LH.energy_hessian.approximations
+    kept = FactoredNormalOperator.from_lagrangian(c, LH.matrix, LH.energy_hessian)
+    assert kept.approximated is not None
+    assert FactoredNormalOperator.from_lagrangian(c, LH.matrix).approximated is None
+    diff = np.abs(approx.eigenvalues - exact.eigenvalues)
+    assert np.all(diff <= approx.errors + exact.errors)
+    assert np.all(approx.errors > exact.errors)
