@@ -50,7 +50,7 @@ from qsa import geometry
 from qsa.constraints import bind_constraints, normal_basis
 from qsa.curve import Curve
 from qsa.energies.base import add_matrices
-from qsa.linalg import SparsePlusLowRank
+from qsa.linalg import ReducedHessian, SparsePlusLowRank, to_dense
 from qsa.spectra.hessian import LagrangeHessian, check_input, lagrange_hessian
 
 __all__ = ["linearization", "normal_operator", "scaled_operator", "symmetric_form",
@@ -269,7 +269,7 @@ def scaled_operator(energy, curve: Curve, lagrange=None, constraints=None) -> np
     LH, cons = _lagrangian(energy, curve, lagrange, constraints)
     N = curve.N
     grid = curve.grid
-    L = _dense(LH.matrix)
+    L = _dense(_uncompressed(LH, energy, curve))
     Md1 = _dense(geometry.M_adjoint(curve))[:N]
     M1 = _dense(geometry.M(curve))[:, :N]
     E = np.zeros((2 * N, N + 1))
@@ -291,9 +291,20 @@ def scaled_operator(energy, curve: Curve, lagrange=None, constraints=None) -> np
 
 
 def _dense(A):
-    if isinstance(A, SparsePlusLowRank) or sp.issparse(A):
-        return A.toarray()
-    return np.asarray(A)
+    return to_dense(A)
+
+
+def _uncompressed(LH, energy, curve):
+    """``LH.matrix``, dense and with the exact energy Hessian if the spectra's was compressed.
+
+    The comoving and scaled gauges form their operators densely and estimate errors from
+    them alone, so a compressed two-point Hessian (``approximations``) is replaced by the
+    exact one, which is affordable wherever the dense operator is.
+    """
+    H = LH.energy_hessian
+    if isinstance(H, ReducedHessian) and H.approximations:
+        return to_dense(LH.matrix) - to_dense(H) + to_dense(energy.hessian(curve))
+    return LH.matrix
 
 
 def linearization(energy, curve: Curve, gauge="comoving", lagrange=None, constraints=None):
@@ -338,7 +349,9 @@ def linearization(energy, curve: Curve, gauge="comoving", lagrange=None, constra
         return normal_operator(energy, curve, lagrange=LH)
     if gauge == "scaled":
         return scaled_operator(energy, curve, lagrange=LH)
-    H = energy.hessian(curve) if gauge == "paper" else LH.matrix
+    H = energy.hessian(curve) if gauge == "paper" else _uncompressed(LH, energy, curve)
+    if isinstance(H, ReducedHessian):  # the operator is dense in this gauge
+        H = to_dense(H)
     out = -(geometry.MMdagger(curve) @ H)
     ab = _projection_factors(curve, cons)
     if ab is None:

@@ -163,3 +163,23 @@ def test_a_dense_constraint_term_keeps_the_compression_estimate(compressed, monk
     diff = np.abs(approx.eigenvalues - exact.eigenvalues)
     assert np.all(diff <= approx.errors + exact.errors)
     assert np.all(approx.errors > exact.errors)
+
+
+@pytest.mark.parametrize("gauge", ["comoving", "scaled"])
+def test_the_dense_gauges_take_the_exact_pair_hessian(compressed, monkeypatch, gauge):
+    """The comoving and scaled operators are dense and carry no compression estimate:
+    they are formed with the exact pair Hessian even when the spectra's is compressed."""
+    from qsa.spectra import linearization
+
+    c, E, op = compressed
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exact = linearization(E, c, gauge)
+        monkeypatch.setattr(ad, "INTERPOLATE_PAIRS", 0)
+        LH = lagrange_hessian(E, c)
+        assert LH.energy_hessian.approximations
+        from_compressed = linearization(E, c, gauge, lagrange=LH)
+    ex = exact.toarray() if hasattr(exact, "toarray") else np.asarray(exact)
+    fc = (from_compressed.toarray() if hasattr(from_compressed, "toarray")
+          else np.asarray(from_compressed))
+    assert np.abs(ex - fc).max() <= 1e-10 * np.abs(ex).max()
