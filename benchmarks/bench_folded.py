@@ -19,9 +19,10 @@ cached derivatives. The performance page runs it with one BLAS thread (set
 more threads when given them); wall-clock is noisy on a shared machine, CPU time less so.
 
 With at least ``qsa.energies.adhesion.INTERPOLATE_PAIRS`` pairs the spectrum takes the
-panel-interpolated pair Hessian when its coarse rank ``3M`` is below ``N``
-(``qsa.energies.adhesion_interp``): the column ``rank`` shows it (``-`` for the assembled
-blocks), and the memory check then does not apply. Its shift-invert core is then
+panel-interpolated pair Hessian when its coarse rank ``3M`` is below ``N``, and with
+``ASSEMBLED_PAIRS_LIMIT`` pairs whatever its rank (``qsa.energies.adhesion_interp``):
+the column ``rank`` shows it (``-`` for the assembled blocks), and the memory check then
+does not apply. Its shift-invert core is then
 eliminated onto the coarse state and the dense ``rank x rank`` system factored by LAPACK
 (``qsa.spectra.coarse``).
 
@@ -55,7 +56,7 @@ from qsa import Curve, FiniteDifference, Fourier, io
 from qsa.commands._memory import available_bytes, format_bytes
 from qsa.energies import Adhesion, CanhamHelfrich, Perimeter
 from qsa.energies.adhesion import ASSEMBLED_PAIRS_LIMIT, INTERPOLATE_PAIRS, adhesion_pairs
-from qsa.energies.adhesion_interp import interpolated_pair_hessian
+from qsa.energies.adhesion_interp import coarse_rank
 from qsa.paper.scenarios import CHAScenario
 from qsa.spectra import capacitance, spectrum
 
@@ -136,7 +137,7 @@ def measure(scenario, N, method, source, gmres=False):
     P = adhesion_pairs(kernel, x, y, method=method)[0].size
     rank = None
     if method == "neighbours" and P >= INTERPOLATE_PAIRS:  # the spectrum's own test
-        r = interpolated_pair_hessian(kernel, c).rank
+        r = coarse_rank(kernel, c)
         rank = r if r < N or P >= ASSEMBLED_PAIRS_LIMIT else None
     need, have = BYTES_PER_PAIR * P, available_bytes()
     if rank is None and need > 0.8 * have:

@@ -56,7 +56,7 @@ from qsa.energies.adhesion_hessian import (
     adhesion_derivatives,
     adjoint_fields,
 )
-from qsa.energies.adhesion_interp import interpolated_hessian
+from qsa.energies.adhesion_interp import coarse_rank, interpolated_hessian
 from qsa.energies.adhesion_velocity import VelocityJacobian, adhesion_velocity_jacobian
 from qsa.energies.base import Energy
 
@@ -409,12 +409,14 @@ _LAST_PAIRS = _LastCall()
 _PAIR_CHUNK = 1 << 16
 
 # Neighbour lists with at least this many pairs make the spectral solvers' Hessian
-# (Adhesion.factored_hessian) panel-interpolated when that is of lower rank than N: the
-# assembled two-point blocks take ~0.8 kB per pair (~2.4 GB here), and the coarse
-# route (qsa.spectra.coarse) is as fast at ~2.7M pairs (folded CHA state, N = 3600),
-# 1.7 times faster at 4.9M (N = 4800)
-INTERPOLATE_PAIRS = 3_000_000
-# and from this many on the interpolated form is taken whatever its rank
+# (Adhesion.factored_hessian) panel-interpolated when that is of lower rank than N
+# (told by coarse_rank before any build): a long-range kernel's few panels (l* = 0.5,
+# N = 1000-1200: rank ~1000) make the coarse route (qsa.spectra.coarse) 1.5-4 times
+# faster than the assembled blocks
+INTERPOLATE_PAIRS = 500_000
+# and from this many on whatever its rank: the assembled blocks take ~0.8 kB per pair
+# (~2.4 GB here), and the coarse route is as fast at ~2.7M pairs (folded CHA state,
+# N = 3600, rank 2N), 1.7 times faster at 4.9M (N = 4800)
 ASSEMBLED_PAIRS_LIMIT = 3_000_000
 
 # Neighbour lists taken with a slightly wider reach, at the last few positions: a curve
@@ -1056,7 +1058,8 @@ class Adhesion(Energy):
         if c.grid.sparse and self.method == "neighbours":
             x, y = c.positions()
             P = _cached_pairs(self.kernel, x, y)[0].size
-            if P >= INTERPOLATE_PAIRS:
+            if P >= ASSEMBLED_PAIRS_LIMIT or (P >= INTERPOLATE_PAIRS
+                                              and coarse_rank(self.kernel, c) < c.N):
                 H = interpolated_hessian(self.kernel, c, max_rank=(
                     None if P < ASSEMBLED_PAIRS_LIMIT else 1 << 62))
                 if H is not None:

@@ -183,3 +183,33 @@ def test_the_dense_gauges_take_the_exact_pair_hessian(compressed, monkeypatch, g
     fc = (from_compressed.toarray() if hasattr(from_compressed, "toarray")
           else np.asarray(from_compressed))
     assert np.abs(ex - fc).max() <= 1e-10 * np.abs(ex).max()
+
+
+def test_the_compression_is_chosen_by_its_rank_before_any_build(monkeypatch):
+    """From INTERPOLATE_PAIRS pairs on, the compressed form is taken when coarse_rank
+    (the panels alone) is below N; a state of higher rank is not compressed at all."""
+    from qsa.energies import adhesion_interp
+
+    builds = []
+    real = adhesion_interp.interpolated_pair_hessian
+
+    def counting(*args, **kwargs):
+        builds.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(adhesion_interp, "interpolated_pair_hessian", counting)
+    # a long-range kernel on a smooth curve: few panels
+    c = Curve.polar(lambda t: 1 + 0.25 * np.cos(4 * t), FiniteDifference(1300))
+    A = Adhesion(40.0, 0.5, 1.0, method="neighbours")
+    assert ad.adhesion_pairs(A.kernel, *c.positions())[0].size >= ad.INTERPOLATE_PAIRS
+    assert adhesion_interp.coarse_rank(A.kernel, c) < c.N
+    H = A.factored_hessian(c)
+    assert H.approximations and H.coarse_index.size and builds
+    # a short-range kernel on a wiggly curve: many panels, rank above N
+    builds.clear()
+    wiggly = Curve.polar(lambda t: 1 + 0.1 * np.cos(25 * t), FiniteDifference(300))
+    B = Adhesion(40.0, 0.05, 1.0, method="neighbours")
+    monkeypatch.setattr(ad, "INTERPOLATE_PAIRS", 0)
+    assert adhesion_interp.coarse_rank(B.kernel, wiggly) >= wiggly.N
+    assert not getattr(B.factored_hessian(wiggly), "approximations", ())
+    assert not builds
