@@ -1037,11 +1037,12 @@ class Adhesion(Energy):
         """``nabla_I^2 E_A`` for the spectral solvers: :meth:`hessian`, or on finite-difference
         grids with many interacting pairs the panel-interpolated form.
 
-        With at least ``INTERPOLATE_PAIRS`` pairs in the neighbour list, the pair Hessian
-        is compressed by :func:`~qsa.energies.adhesion_interp.interpolated_pair_hessian`
-        (storage O(N + M^2) instead of ~0.8 kB per pair) and, when its rank ``3M`` is
-        below ``N`` (or whatever it is with ``ASSEMBLED_PAIRS_LIMIT`` pairs or more),
-        returned as the extended-state
+        With at least ``INTERPOLATE_PAIRS`` pairs in the neighbour list and a rank ``3M``
+        below ``N`` (:func:`~qsa.energies.adhesion_interp.coarse_rank`, told before any
+        build), or with ``ASSEMBLED_PAIRS_LIMIT`` pairs or more whatever the rank, the
+        pair Hessian is compressed by
+        :func:`~qsa.energies.adhesion_interp.interpolated_pair_hessian` (storage
+        O(N + M^2) instead of ~0.8 kB per pair) and returned as the extended-state
         :func:`~qsa.energies.adhesion_interp.interpolated_reduced_hessian`. That matrix
         carries the compression's error estimate
         (:meth:`~qsa.linalg.ReducedHessian.approximation_error`), which the spectra add

@@ -31,9 +31,9 @@ interface ``G``; the interiors of different chunks are then uncoupled, so with
     E = V_G - sum_k V_k A_k^{-1} A_kG,
 
 each interior solve has the few columns of ``W`` living on its chunk (a column of ``W``
-is one interpolation panel's), ``S`` is ``|G| x |G|`` with ``|G| ~ K s`` unknowns per
-node, and ``C T`` costs ``2 r^2 |G| + 2 r^3 / K`` instead of the ``2 r^3`` of a dense
-product. A sparse LU of the whole core factors the same coarse block at about a sixth
+is one interpolation panel's), ``S`` is ``|G| x |G|`` with ``|G|`` the unknowns of
+``K s`` nodes, and ``C T`` costs ``2 r^2 |G| + 2 r^3 / K`` instead of the ``2 r^3`` of a
+dense product. A sparse LU of the whole core factors the same coarse block at about a sixth
 of LAPACK's rate and fills in beyond it.
 
 The elimination is exact in exact arithmetic; :class:`~qsa.spectra.factored.ShiftInvert`
