@@ -46,8 +46,29 @@ REASONS = {
 }
 
 
-@dataclass(frozen=True, eq=False)
-class HomotopyRun:
+@dataclass(frozen=True, eq=False, kw_only=True)
+class _PathRun:
+    """What a globalized Newton solve records along its path of states (the fields
+    :class:`HomotopyRun` and :class:`~qsa.equilibria.softmode.SoftModeRun` share)."""
+
+    x: np.ndarray
+    reason: str
+    history: np.ndarray
+    states: np.ndarray
+    n_steps: int
+    n_rejected: int
+    n_lu: int
+    newton: NewtonRun | None = None
+    n_newton: int = 0
+
+    @property
+    def success(self) -> bool:
+        """Newton converged from the path."""
+        return self.newton is not None and self.newton.success
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class HomotopyRun(_PathRun):
     """The record of :func:`newton_homotopy`.
 
     Attributes
@@ -72,24 +93,12 @@ class HomotopyRun:
         The Newton solve from the crossing of ``p = 0`` (``None``: no crossing).
     n_newton : int
         Newton steps of that solve.
+    success : bool
+        The path crossed ``p = 0`` and Newton converged from there.
     """
 
-    x: np.ndarray
-    reason: str
     p: np.ndarray
-    history: np.ndarray
     arclength: np.ndarray
-    states: np.ndarray
-    n_steps: int
-    n_rejected: int
-    n_lu: int
-    newton: NewtonRun | None = None
-    n_newton: int = 0
-
-    @property
-    def success(self) -> bool:
-        """The path crossed ``p = 0`` and Newton converged from there."""
-        return self.newton is not None and self.newton.success
 
     @property
     def p_min(self) -> float:
@@ -256,8 +265,9 @@ def newton_homotopy(system, x0, solve, *, tol=1e-10, maxiter=60, newton_maxiter=
     newton = None
 
     def fail(why):
-        return HomotopyRun(best[1], why, np.array(ps), np.array(hist), np.array(arc),
-                           np.array(states), n_steps, n_rejected, n_lu)
+        return HomotopyRun(x=best[1], reason=why, p=np.array(ps), history=np.array(hist),
+                           arclength=np.array(arc), states=np.array(states),
+                           n_steps=n_steps, n_rejected=n_rejected, n_lu=n_lu)
 
     try:
         start = np.zeros(n + 1)
@@ -335,6 +345,7 @@ def newton_homotopy(system, x0, solve, *, tol=1e-10, maxiter=60, newton_maxiter=
         if iters <= 2:
             ds = min(2 * ds, ds_max)
     x = newton.x if newton is not None and newton.success else best[1]
-    return HomotopyRun(x, reason, np.array(ps), np.array(hist), np.array(arc),
-                       np.array(states), n_steps, n_rejected, n_lu, newton,
-                       0 if newton is None else newton.n_newton)
+    return HomotopyRun(x=x, reason=reason, p=np.array(ps), history=np.array(hist),
+                       arclength=np.array(arc), states=np.array(states), n_steps=n_steps,
+                       n_rejected=n_rejected, n_lu=n_lu, newton=newton,
+                       n_newton=0 if newton is None else newton.n_newton)

@@ -25,7 +25,6 @@ equilibrium along the soft mode, only a slow flow past the minimum.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg as sla
@@ -33,11 +32,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from qsa.energies.constrained import residual_scale
-from qsa.equilibria.homotopy import bordered_solve, state_weights
+from qsa.equilibria.homotopy import _PathRun, bordered_solve, state_weights
 from qsa.equilibria.system import bordered_matrix
-
-if TYPE_CHECKING:
-    from qsa.equilibria.newton import NewtonRun
 
 __all__ = ["SoftModeRun", "smallest_singular", "soft_mode_newton"]
 
@@ -50,8 +46,8 @@ REASONS = {
 }
 
 
-@dataclass(frozen=True, eq=False)
-class SoftModeRun:
+@dataclass(frozen=True, eq=False, kw_only=True)
+class SoftModeRun(_PathRun):
     """The record of :func:`soft_mode_newton`.
 
     Attributes
@@ -78,26 +74,14 @@ class SoftModeRun:
         The last Newton solve tried from the curve.
     n_newton : int
         Newton steps of the solves tried.
+    success : bool
+        A Newton solve from the soft curve converged.
     """
 
-    x: np.ndarray
-    reason: str
     s: np.ndarray
     tau: np.ndarray
     dtau: np.ndarray
     sigma: np.ndarray
-    history: np.ndarray
-    states: np.ndarray
-    n_steps: int
-    n_rejected: int
-    n_lu: int
-    newton: NewtonRun | None = None
-    n_newton: int = 0
-
-    @property
-    def success(self) -> bool:
-        """A Newton solve from the soft curve converged."""
-        return self.newton is not None and self.newton.success
 
 
 def smallest_singular(J, v0=None, iterations=4):
@@ -264,10 +248,12 @@ def soft_mode_newton(system, x0, solve, *, tol=1e-10, maxiter=30, newton_maxiter
     def run(why):
         x = newton.x if newton is not None and newton.success else best[1]
         k = len(rec["s"])
-        return SoftModeRun(x, why, np.array(rec["s"]), np.array(rec["tau"]),
-                           np.array(rec["dtau"]), np.array(rec["sigma"]).reshape(k, 2),
-                           np.array(rec["history"]), np.array(rec["states"]), n_steps,
-                           n_rejected, n_lu, newton, n_newton)
+        return SoftModeRun(x=x, reason=why, s=np.array(rec["s"]), tau=np.array(rec["tau"]),
+                           dtau=np.array(rec["dtau"]),
+                           sigma=np.array(rec["sigma"]).reshape(k, 2),
+                           history=np.array(rec["history"]), states=np.array(rec["states"]),
+                           n_steps=n_steps, n_rejected=n_rejected, n_lu=n_lu, newton=newton,
+                           n_newton=n_newton)
 
     try:
         n_lu += 2
