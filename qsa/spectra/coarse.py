@@ -128,8 +128,8 @@ class CoarseSchurCore:
         X = np.nonzero(node >= 0)[0]
         # coarse unknowns in the order of the first node they act on (a chunk's coarse
         # rows and columns are then ranges)
-        mi = 3 * N + 2 * p + q + coarse
-        first = M[mi].tocoo()
+        Mm = M[3 * N + 2 * p + q + coarse]
+        first = Mm.tocoo()
         pos = np.full(r, N, dtype=np.intp)
         np.minimum.at(pos, first.row, np.where(node[first.col] >= 0, node[first.col], N))
         order = np.argsort(pos, kind="stable")
@@ -138,8 +138,7 @@ class CoarseSchurCore:
         mi = zi + q
         self.shape = (n, n)
         self._zi, self._mi, self._X = zi, mi, X
-        MX = M[X]
-        Mz, Mm = M[zi], M[mi]
+        MX, Mz, Mm = M[X], M[zi], Mm[order]
         A = MX[:, X].tocsr()
         self._W = MX[:, mi].tocsr()
         self._V = Mm[:, X].tocsr()

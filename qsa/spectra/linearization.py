@@ -269,9 +269,9 @@ def scaled_operator(energy, curve: Curve, lagrange=None, constraints=None) -> np
     LH, cons = _lagrangian(energy, curve, lagrange, constraints)
     N = curve.N
     grid = curve.grid
-    L = _dense(_uncompressed(LH, energy, curve))
-    Md1 = _dense(geometry.M_adjoint(curve))[:N]
-    M1 = _dense(geometry.M(curve))[:, :N]
+    L = to_dense(_uncompressed(LH, energy, curve))
+    Md1 = to_dense(geometry.M_adjoint(curve))[:N]
+    M1 = to_dense(geometry.M(curve))[:, :N]
     E = np.zeros((2 * N, N + 1))
     E[:N, :N] = np.eye(N)
     E[N:, N] = 1.0
@@ -282,16 +282,12 @@ def scaled_operator(energy, curve: Curve, lagrange=None, constraints=None) -> np
     y = M1 @ dV
     yk, yg = y[:N], y[N:]
     c = grid.weights @ yg
-    Dpinv = np.linalg.pinv(_dense(grid.derivative()))
+    Dpinv = np.linalg.pinv(to_dense(grid.derivative()))
     v = Dpinv @ (yg - c[None, :])
     K = np.empty((N + 1, N + 1))
     K[:N] = yk - curve.grad_s(curve.kappa)[:, None] * v
     K[N] = c
     return K
-
-
-def _dense(A):
-    return to_dense(A)
 
 
 def _uncompressed(LH, energy, curve):
